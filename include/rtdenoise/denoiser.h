@@ -1,0 +1,68 @@
+// The denoiser: a method (a list of named passes) run on a device, keeping its history there
+// across frames.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rtdenoise/image.h"
+#include "rtdenoise/settings.h"
+
+namespace rtd {
+
+// One pass of a method's pipeline, with the buffers it reads and writes (for reading the
+// pipeline and timing it).
+struct PassInfo {
+    std::string name;
+    std::vector<std::string> inputs;
+    std::vector<std::string> outputs;
+};
+
+struct FrameStats {
+    std::vector<double> passMilliseconds;  // one per pass, same order as passes()
+    double uploadMilliseconds = 0.0;       // host -> device (including format conversion)
+    double downloadMilliseconds = 0.0;     // device -> host
+    long long nonFiniteReplaced = 0;       // NaN/Inf values in the beauty (and albedo) set to 0
+    double validHistoryFraction = 0.0;     // temporal methods: pixels whose history was accepted
+};
+
+// Per-pixel reason of the back-projection test (DebugView::Reprojection colours them).
+enum class ReprojectionResult : int {
+    Valid = 0,
+    OutsideScreen = 1,  // drawn red
+    OtherObject = 2,    // drawn yellow
+    Background = 3,     // drawn blue; valid history is drawn green
+    NoHistory = 4,      // first frame, or the size changed: drawn black
+};
+
+class Denoiser {
+public:
+    explicit Denoiser(const DenoiserSettings& settings = {});
+    ~Denoiser();
+    Denoiser(Denoiser&&) noexcept;
+    Denoiser& operator=(Denoiser&&) noexcept;
+
+    // Denoises one frame; temporal methods use (and update) the history of the previous call.
+    // Throws rtd::Error if the frame is inconsistent (sizes, IDs, matrices).
+    Image processFrame(const Frame& frame);
+    // Same, writing into `output` (reused across frames: no allocation once sized).
+    void processFrame(const Frame& frame, Image& output);
+
+    // Forgets the history (e.g. at a camera cut).
+    void reset();
+
+    const DenoiserSettings& settings() const;
+    const std::vector<PassInfo>& passes() const;
+    const FrameStats& lastFrameStats() const;
+    std::string deviceName() const;
+
+    // Colour-coded validity of the last back-projection (temporal methods; black otherwise).
+    Image reprojectionDebugImage() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rtd

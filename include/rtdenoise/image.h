@@ -1,0 +1,57 @@
+// Host-side images and frames: what a renderer hands to the denoiser and what it gets back.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace rtd {
+
+// A float image with 1 or 3 interleaved channels, rows top to bottom.
+struct Image {
+    int width = 0;
+    int height = 0;
+    int channels = 0;
+    std::vector<float> pixels;  // width * height * channels values
+
+    Image() = default;
+    Image(int w, int h, int c, float fill = 0.0f)
+        : width(w), height(h), channels(c), pixels(std::size_t(w) * h * c, fill) {}
+
+    std::size_t pixelCount() const { return std::size_t(width) * height; }
+    float& at(int x, int y, int c = 0) { return pixels[(std::size_t(y) * width + x) * channels + c]; }
+    float at(int x, int y, int c = 0) const {
+        return pixels[(std::size_t(y) * width + x) * channels + c];
+    }
+    bool empty() const { return pixels.empty(); }
+};
+
+// Row-major 4x4 matrix (m[row][col]); points are column vectors: s = M * (x, y, z, 1).
+struct Matrix4 {
+    std::array<std::array<float, 4>, 4> m{};
+    static Matrix4 identity() {
+        Matrix4 r;
+        for (int i = 0; i < 4; ++i) r.m[i][i] = 1.0f;
+        return r;
+    }
+};
+
+// One frame of a path-traced sequence with its G-buffer (layout: shared/data/README.md).
+struct Frame {
+    Image beauty;    // 3 channels, noisy linear radiance
+    Image normal;    // 3 channels, world-space unit normal, (0,0,0) on background
+    Image position;  // 3 channels, world-space hit position
+    Image depth;     // 1 channel, camera-space depth (w after projection)
+    std::vector<std::int32_t> objectId;  // width * height, 0..K-1, -1 on background
+    std::optional<Image> albedo;         // 3 channels, optional
+    std::vector<Matrix4> objectToWorld;  // K matrices, object k's local-to-world
+    Matrix4 worldToCamera = Matrix4::identity();
+    Matrix4 worldToScreen = Matrix4::identity();
+
+    int width() const { return beauty.width; }
+    int height() const { return beauty.height; }
+};
+
+}  // namespace rtd

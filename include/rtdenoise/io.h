@@ -1,0 +1,89 @@
+// Reading course-layout sequences and writing results. Every function throws rtd::Error with the
+// file's path and the problem; writers write to a temporary name and rename, so no file is ever
+// left half-written.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "rtdenoise/image.h"
+
+namespace rtd {
+
+// ---- reading ----
+
+// Reads the named channels of an EXR (HALF or FLOAT, any compression OpenEXR reads) into an
+// interleaved float image. Each entry of `channelChoices` lists acceptable names for one output
+// channel, first match wins (e.g. {{"R"}, {"G"}, {"B"}} or {{"Y", "Z", "R"}}).
+Image readExr(const std::filesystem::path& file,
+              const std::vector<std::vector<std::string>>& channelChoices);
+
+// Reads matrix_i.mat: int32 K, then K + 2 row-major float32 4x4 matrices (little-endian).
+struct MatrixFile {
+    std::vector<Matrix4> objectToWorld;  // K
+    Matrix4 worldToCamera;
+    Matrix4 worldToScreen;
+};
+MatrixFile readMatrixFile(const std::filesystem::path& file);
+
+// A folder in the course layout: beauty_i.exr, normal_i.exr, position_i.exr, depth_i.exr,
+// ID_i.exr, matrix_i.mat, optional albedo_i.exr, for i = 0..frameCount-1.
+class Sequence {
+public:
+    // Discovers the frame count from beauty_<i>.exr; throws if none, or on a gap in the numbering.
+    explicit Sequence(std::filesystem::path folder);
+
+    int frameCount() const { return frameCount_; }
+    const std::filesystem::path& folder() const { return folder_; }
+
+    // Reads and validates frame i: all buffers the same size, IDs in -1..K-1.
+    Frame readFrame(int index) const;
+
+private:
+    std::filesystem::path folder_;
+    int frameCount_ = 0;
+};
+
+// ---- writing ----
+
+// Linear float RGB EXR (ZIP compression). `image` has 3 channels.
+void writeExr(const std::filesystem::path& file, const Image& image);
+// 8-bit RGB PNG of an already display-encoded image (values in [0,1], 3 channels).
+void writePng(const std::filesystem::path& file, const Image& image);
+
+// ---- display ----
+
+// Narkowicz's ACES fit x(2.51x+0.03)/(x(2.43x+0.59)+0.14), clamped to [0,1].
+float acesFilm(float x);
+// Linear [0,1] to sRGB-encoded [0,1].
+float linearToSrgb(float x);
+// exposure * linear -> ACES -> sRGB, per channel, NaN-safe (non-finite becomes 0).
+Image toneMap(const Image& linear, float exposure = 1.0f);
+
+// Encodes frames to an H.264 MP4 through the `ffmpeg` program. Frames are tone-mapped images
+// ([0,1], 3 channels) of one size. Throws MissingTool if ffmpeg is not on PATH.
+class VideoWriter {
+public:
+    VideoWriter(std::filesystem::path file, int width, int height, int framesPerSecond = 24);
+    ~VideoWriter();  // abandons an unfinished video (the temporary file is removed)
+    VideoWriter(const VideoWriter&) = delete;
+    VideoWriter& operator=(const VideoWriter&) = delete;
+
+    void addFrame(const Image& displayImage);
+    void finish();  // waits for ffmpeg and renames the temporary file into place
+
+    static bool ffmpegAvailable();
+
+private:
+    std::filesystem::path file_;
+    std::filesystem::path tempFile_;
+    int width_, height_;
+    void* pipe_ = nullptr;  // FILE* from popen
+    std::vector<unsigned char> rowBuffer_;
+};
+
+// Writes `bytes` to `file` through a temporary name in the same folder and a rename.
+void writeFileAtomically(const std::filesystem::path& file, const std::string& bytes);
+
+}  // namespace rtd

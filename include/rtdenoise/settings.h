@@ -1,0 +1,66 @@
+// Settings of every method. Each field: [range] meaning. Defaults are the course assignment's
+// (shared/seeds/001): alpha 0.2, sigma_plane 0.1, sigma_color 0.6, sigma_normal 0.1,
+// sigma_coord 32, k 1.
+#pragma once
+
+#include <string>
+
+namespace rtd {
+
+enum class Method {
+    Jbf,       // single frame: brute-force joint bilateral filter
+    Atrous,    // single frame: edge-avoiding A-Trous wavelet filter
+    Temporal,  // the assignment's pipeline: spatial filter, back-projection, accumulation
+};
+
+enum class SpatialFilter { Jbf, Atrous };
+
+enum class DeviceType { Cpu, Cuda, Auto };
+
+// Edge-stopping terms shared by the JBF and the A-Trous filter.
+struct EdgeStoppingSettings {
+    float sigmaColor = 0.6f;   // [>0] colour distance (RGB, linear) at which weight falls to e^-0.5
+    float sigmaNormal = 0.1f;  // [>0] angle between normals (radians), D_normal = acos(n_i . n_j)
+    float sigmaPlane = 0.1f;   // [>0] D_plane = n_i . (p_j - p_i) / |p_j - p_i|
+};
+
+struct JbfSettings {
+    int radius = 16;           // [0, 64] half width of the square kernel: (2r+1)^2 taps
+    float sigmaCoord = 32.0f;  // [>0] pixel distance at which the spatial weight falls to e^-0.5
+};
+
+struct AtrousSettings {
+    int passes = 5;  // [1, 10] wavelet levels; pass i uses stride 2^i on the previous pass's output
+};
+
+struct OutlierSettings {
+    bool enabled = true;  // remove fireflies before filtering
+    int radius = 3;       // [1, 15] window half width ((2r+1)^2 pixels)
+    float k = 2.0f;       // [>0] luminance is clamped to mean + k * stddev of the window
+};
+
+struct TemporalSettings {
+    SpatialFilter spatialFilter = SpatialFilter::Atrous;  // filter applied before accumulation
+    float alpha = 0.2f;    // [0, 1] weight of the current frame (1 where history is invalid)
+    float clampK = 1.0f;   // [>0] history clamped to mu +- k sigma of the current neighbourhood
+    int clampRadius = 3;   // [1, 15] neighbourhood half width for mu and sigma (3 -> 7x7)
+};
+
+struct DenoiserSettings {
+    Method method = Method::Temporal;
+    DeviceType device = DeviceType::Auto;
+    EdgeStoppingSettings edges;
+    JbfSettings jbf;
+    AtrousSettings atrous;
+    OutlierSettings outlier;
+    TemporalSettings temporal;
+};
+
+// Throws rtd::Error(InvalidArgument) naming the first setting out of its range.
+void validate(const DenoiserSettings& settings);
+
+const char* toString(Method method);
+const char* toString(SpatialFilter filter);
+const char* toString(DeviceType device);
+
+}  // namespace rtd
