@@ -23,8 +23,7 @@ struct FrameStats {
     std::vector<double> passMilliseconds;  // one per pass, same order as passes()
     double uploadMilliseconds = 0.0;       // host -> device (including format conversion)
     double downloadMilliseconds = 0.0;     // device -> host
-    long long nonFiniteReplaced = 0;       // NaN/Inf values in the beauty (and albedo) set to 0
-    double validHistoryFraction = 0.0;     // temporal methods: pixels whose history was accepted
+    long long nonFiniteReplaced = 0;       // NaN/Inf values in the beauty set to 0
 };
 
 // Per-pixel reason of the back-projection test (DebugView::Reprojection colours them).

@@ -1,0 +1,219 @@
+// `rtdenoise denoise INPUT_DIR -o OUT_DIR`: reads the sequence (the next frame is read while the
+// current one is filtered), denoises it, writes result_<i>.exr (+ PNG, debug images, MP4).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <future>
+#include <map>
+#include <optional>
+
+#include "commands.h"
+#include "progress.h"
+#include "rtdenoise/rtdenoise.h"
+
+namespace fs = std::filesystem;
+
+namespace rtd::cli {
+namespace {
+
+struct DenoiseOptions {
+    fs::path input;
+    fs::path output;
+    bool png = false;
+    bool debug = false;
+    fs::path video;
+    int fps = 24;
+    float exposure = 1.0f;
+    int maxFrames = 0;
+    bool quiet = false;
+};
+
+const std::map<std::string, Method> kMethods{
+    {"jbf", Method::Jbf}, {"atrous", Method::Atrous}, {"temporal", Method::Temporal}};
+const std::map<std::string, SpatialFilter> kFilters{{"jbf", SpatialFilter::Jbf},
+                                                    {"atrous", SpatialFilter::Atrous}};
+const std::map<std::string, DeviceType> kDevices{
+    {"cpu", DeviceType::Cpu}, {"cuda", DeviceType::Cuda}, {"auto", DeviceType::Auto}};
+
+void ensureWritableFolder(const fs::path& folder) {
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec || !fs::is_directory(folder))
+        throw Error(ErrorCode::IoFailure,
+                    fmt::format("{}: cannot create the output folder ({})", folder.string(),
+                                ec ? ec.message() : "not a directory"));
+    // Probe with a real file: permissions, read-only mounts and full disks all show here.
+    fs::path probe = folder / ".rtdenoise-write-test";
+    try {
+        writeFileAtomically(probe, "");
+    } catch (const Error&) {
+        throw Error(ErrorCode::IoFailure,
+                    fmt::format("{}: the output folder is not writable", folder.string()));
+    }
+    fs::remove(probe, ec);
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    std::size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) {
+    Sequence sequence(options.input);
+    int frames = sequence.frameCount();
+    if (options.maxFrames > 0) frames = std::min(frames, options.maxFrames);
+    ensureWritableFolder(options.output);
+    if (!options.video.empty() && !VideoWriter::ffmpegAvailable())
+        throw Error(ErrorCode::MissingTool,
+                    "ffmpeg not found on PATH: install it (apt-get install ffmpeg) or drop --video");
+
+    Denoiser denoiser(settings);
+    if (!options.quiet) {
+        fmt::print(stderr, "rtdenoise: {} frames from {}, method {}, device {}\n", frames,
+                   options.input.string(), toString(settings.method), denoiser.deviceName());
+    }
+    std::optional<VideoWriter> video;
+    Progress progress(frames, options.quiet);
+
+    using Clock = std::chrono::steady_clock;
+    std::vector<std::vector<double>> passTimes(denoiser.passes().size());
+    std::vector<double> frameTimes, readWaitTimes, writeTimes;
+    long long nonFinite = 0;
+    auto start = Clock::now();
+
+    // Frame i+1 is read on another thread while frame i is denoised.
+    auto readAsync = [&](int i) {
+        return std::async(std::launch::async, [&sequence, i] { return sequence.readFrame(i); });
+    };
+    std::future<Frame> next = readAsync(0);
+    Image result;
+    for (int i = 0; i < frames; ++i) {
+        auto waitStart = Clock::now();
+        Frame frame = next.get();
+        readWaitTimes.push_back(
+            std::chrono::duration<double, std::milli>(Clock::now() - waitStart).count());
+        if (i + 1 < frames) next = readAsync(i + 1);
+
+        auto frameStart = Clock::now();
+        denoiser.processFrame(frame, result);
+        frameTimes.push_back(
+            std::chrono::duration<double, std::milli>(Clock::now() - frameStart).count());
+        const FrameStats& stats = denoiser.lastFrameStats();
+        for (std::size_t p = 0; p < passTimes.size(); ++p)
+            passTimes[p].push_back(stats.passMilliseconds[p]);
+        nonFinite += stats.nonFiniteReplaced;
+
+        auto writeStart = Clock::now();
+        writeExr(options.output / fmt::format("result_{}.exr", i), result);
+        if (options.png || !options.video.empty()) {
+            Image display = toneMap(result, options.exposure);
+            if (options.png) writePng(options.output / fmt::format("result_{}.png", i), display);
+            if (!options.video.empty()) {
+                if (!video) video.emplace(options.video, display.width, display.height, options.fps);
+                video->addFrame(display);
+            }
+        }
+        if (options.debug && settings.method == Method::Temporal)
+            writePng(options.output / fmt::format("reprojection_{}.png", i),
+                     denoiser.reprojectionDebugImage());
+        writeTimes.push_back(
+            std::chrono::duration<double, std::milli>(Clock::now() - writeStart).count());
+        progress.update(i + 1);
+    }
+    if (video) video->finish();
+    progress.finish();
+    double total = std::chrono::duration<double>(Clock::now() - start).count();
+
+    if (nonFinite > 0)
+        fmt::print(stderr, "rtdenoise: warning: {} NaN/Inf radiance values were replaced by 0\n",
+                   nonFinite);
+    if (!options.quiet) {
+        fmt::print("{} frames of {}x{} in {:.2f} s ({:.1f} fps overall, I/O included)\n", frames,
+                   result.width, result.height, total, frames / total);
+        fmt::print("denoise  median {:8.2f} ms/frame  (device {})\n", median(frameTimes),
+                   denoiser.deviceName());
+        for (std::size_t p = 0; p < passTimes.size(); ++p)
+            fmt::print("  {:<12} median {:8.2f} ms\n", denoiser.passes()[p].name,
+                       median(passTimes[p]));
+        fmt::print("read wait median {:8.2f} ms/frame (reading overlaps denoising)\n",
+                   median(readWaitTimes));
+        fmt::print("write     median {:8.2f} ms/frame\n", median(writeTimes));
+        fmt::print("output: {}\n", options.output.string());
+        if (!options.video.empty()) fmt::print("video: {}\n", options.video.string());
+    }
+    return 0;
+}
+
+}  // namespace
+
+void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
+    c.add_option("--method", s.method, "Denoising method")
+        ->transform(CLI::CheckedTransformer(kMethods, CLI::ignore_case))
+        ->capture_default_str();
+    c.add_option("--spatial-filter", s.temporal.spatialFilter,
+                 "Spatial filter of the temporal method")
+        ->transform(CLI::CheckedTransformer(kFilters, CLI::ignore_case))
+        ->capture_default_str();
+    c.add_option("--device", s.device, "Compute device (auto picks a GPU when there is one)")
+        ->transform(CLI::CheckedTransformer(kDevices, CLI::ignore_case))
+        ->capture_default_str();
+    c.add_option("--sigma-color", s.edges.sigmaColor, "[>0] colour edge-stopping sigma")
+        ->capture_default_str();
+    c.add_option("--sigma-normal", s.edges.sigmaNormal,
+                 "[>0] normal-angle edge-stopping sigma (radians)")
+        ->capture_default_str();
+    c.add_option("--sigma-plane", s.edges.sigmaPlane, "[>0] plane-distance edge-stopping sigma")
+        ->capture_default_str();
+    c.add_option("--sigma-coord", s.jbf.sigmaCoord, "[>0] JBF spatial sigma (pixels)")
+        ->capture_default_str();
+    c.add_option("--radius", s.jbf.radius, "[0,64] JBF kernel half width")
+        ->capture_default_str();
+    c.add_option("--atrous-passes", s.atrous.passes, "[1,10] A-Trous levels (stride 2^i)")
+        ->capture_default_str();
+    c.add_option("--alpha", s.temporal.alpha, "[0,1] weight of the current frame")
+        ->capture_default_str();
+    c.add_option("--clamp-k", s.temporal.clampK, "[>0] history clamp: mu +- k sigma")
+        ->capture_default_str();
+    c.add_option("--clamp-radius", s.temporal.clampRadius,
+                 "[1,15] history clamp window half width (3: 7x7)")
+        ->capture_default_str();
+    c.add_flag("--outlier,!--no-outlier", s.outlier.enabled,
+               "Firefly removal before filtering (on by default)");
+    c.add_option("--outlier-radius", s.outlier.radius, "[1,15] firefly window half width")
+        ->capture_default_str();
+    c.add_option("--outlier-k", s.outlier.k, "[>0] luminance clamp: mean + k stddev")
+        ->capture_default_str();
+}
+
+Command addDenoiseCommand(CLI::App& app) {
+    auto options = std::make_shared<DenoiseOptions>();
+    auto settings = std::make_shared<DenoiserSettings>();
+    CLI::App* c = app.add_subcommand(
+        "denoise", "Denoise a sequence folder (beauty_i.exr, normal_i.exr, position_i.exr, "
+                   "depth_i.exr, ID_i.exr, matrix_i.mat) into OUT_DIR/result_<i>.exr");
+    c->set_config("--config", "", "Read options from a TOML/INI file (keys = long option names)");
+    c->add_option("INPUT_DIR", options->input, "Folder of the input sequence")->required();
+    c->add_option("-o,--output", options->output, "Output folder (created if missing)")
+        ->required();
+    addDenoiserOptions(*c, *settings);
+    c->add_flag("--png", options->png, "Also write result_<i>.png (ACES, sRGB)");
+    c->add_option("--exposure", options->exposure, "Exposure multiplier before tone mapping")
+        ->capture_default_str();
+    c->add_option("--video", options->video, "Also write an H.264 MP4 (needs ffmpeg)");
+    c->add_option("--fps", options->fps, "Frames per second of the video")
+        ->check(CLI::Range(1, 240))
+        ->capture_default_str();
+    c->add_flag("--debug", options->debug,
+                "Write reprojection_<i>.png: history valid green, outside the screen red, other "
+                "object yellow, background blue, no history black");
+    c->add_option("--frames", options->maxFrames, "Denoise only the first N frames (0: all)")
+        ->check(CLI::NonNegativeNumber);
+    c->add_flag("-q,--quiet", options->quiet, "No progress or summary");
+    return {c, [options, settings] { return runDenoise(*options, *settings); }};
+}
+
+}  // namespace rtd::cli

@@ -1,0 +1,29 @@
+// rtdenoise: the command line over the library.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <vector>
+
+#include "commands.h"
+#include "rtdenoise/error.h"
+
+int main(int argc, char** argv) {
+    CLI::App app{"rtdenoise: real-time denoising of path-traced frame sequences"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "rtdenoise 0.1.0");
+    std::vector<rtd::cli::Command> commands{rtd::cli::addDenoiseCommand(app)};
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+    try {
+        for (auto& command : commands)
+            if (command.app->parsed()) return command.run();
+    } catch (const std::exception& e) {
+        fmt::print(stderr, "rtdenoise: error: {}\n", e.what());
+        return 1;
+    }
+    return 0;
+}

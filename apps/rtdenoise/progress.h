@@ -1,0 +1,23 @@
+// A progress line for long runs: frame i/N, frames per second, ETA. Redrawn in place on a
+// terminal, one line per frame otherwise (logs), nothing when quiet.
+#pragma once
+
+#include <chrono>
+#include <string>
+
+namespace rtd::cli {
+
+class Progress {
+public:
+    Progress(int total, bool quiet);
+    void update(int done);  // `done` frames finished
+    void finish();
+
+private:
+    int total_;
+    bool quiet_;
+    bool terminal_;
+    std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace rtd::cli

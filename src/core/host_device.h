@@ -1,0 +1,11 @@
+// The one place that knows which compiler sees the code: kernels are marked RTD_HOST_DEVICE and
+// compile unchanged for the CPU (g++/clang) and for CUDA (nvcc).
+#pragma once
+
+#if defined(__CUDACC__)
+#define RTD_HOST_DEVICE __host__ __device__
+#define RTD_INLINE __forceinline__
+#else
+#define RTD_HOST_DEVICE
+#define RTD_INLINE inline __attribute__((always_inline))
+#endif

@@ -1,0 +1,76 @@
+// A compute device: memory, copies and kernel launches. The CPU device runs kernels with an
+// OpenMP parallelFor2D; a GPU device launches the same functors from CUDA.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+#include "kernels/kernel_list.h"
+#include "rtdenoise/settings.h"
+
+namespace rtd {
+
+class Device {
+public:
+    virtual ~Device() = default;
+    virtual std::string name() const = 0;
+    // True if kernels can read and write host memory directly (no staging copies needed).
+    virtual bool sharesHostMemory() const = 0;
+
+    virtual void* allocate(std::size_t bytes) = 0;
+    virtual void release(void* pointer) noexcept = 0;
+    virtual void copyToDevice(void* deviceDst, const void* hostSrc, std::size_t bytes) = 0;
+    virtual void copyToHost(void* hostDst, const void* deviceSrc, std::size_t bytes) = 0;
+    virtual void synchronize() = 0;
+    // Sum of n bytes in device memory (counting flagged pixels).
+    virtual long long sumBytes(const std::uint8_t* deviceData, std::size_t n) = 0;
+
+#define RTD_DECLARE_LAUNCH(K) virtual void launch(const K& kernel, int width, int height) = 0;
+    RTD_FOR_EACH_KERNEL(RTD_DECLARE_LAUNCH)
+#undef RTD_DECLARE_LAUNCH
+};
+
+// Throws rtd::Error(DeviceFailure) if the requested device is not available.
+std::unique_ptr<Device> createDevice(DeviceType type);
+std::unique_ptr<Device> createCpuDevice();
+
+// An array of T in a device's memory, freed with its owner.
+template <class T>
+class DeviceBuffer {
+public:
+    DeviceBuffer() = default;
+    DeviceBuffer(Device& device, std::size_t count)
+        : device_(&device),
+          data_(static_cast<T*>(device.allocate(count * sizeof(T)))),
+          count_(count) {}
+    ~DeviceBuffer() { reset(); }
+    DeviceBuffer(DeviceBuffer&& o) noexcept { swap(o); }
+    DeviceBuffer& operator=(DeviceBuffer&& o) noexcept {
+        DeviceBuffer(std::move(o)).swap(*this);
+        return *this;
+    }
+    DeviceBuffer(const DeviceBuffer&) = delete;
+    DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+
+    void reset() noexcept {
+        if (data_) device_->release(data_);
+        data_ = nullptr;
+        count_ = 0;
+    }
+    void swap(DeviceBuffer& o) noexcept {
+        std::swap(device_, o.device_);
+        std::swap(data_, o.data_);
+        std::swap(count_, o.count_);
+    }
+    T* data() const { return data_; }
+    std::size_t size() const { return count_; }
+    std::size_t bytes() const { return count_ * sizeof(T); }
+
+private:
+    Device* device_ = nullptr;
+    T* data_ = nullptr;
+    std::size_t count_ = 0;
+};
+
+}  // namespace rtd

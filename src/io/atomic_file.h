@@ -1,0 +1,70 @@
+// Private helpers of the I/O layer: temporary names beside the target and the rename that
+// publishes them, so a reader never sees a half-written file.
+#pragma once
+
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <string>
+#include <system_error>
+
+#include "rtdenoise/error.h"
+
+namespace rtd::io_detail {
+
+// Throws IoFailure when the folder `file` goes into is missing, with a clearer message than the
+// "No such file" a writer would report for the temporary name.
+inline void requireParentFolder(const std::filesystem::path& file) {
+    const std::filesystem::path parent = file.parent_path();
+    if (parent.empty()) return;  // the current folder
+    std::error_code ec;
+    if (!std::filesystem::is_directory(parent, ec)) {
+        throw Error(ErrorCode::IoFailure,
+                    file.string() + ": cannot write, folder '" + parent.string() +
+                        "' does not exist");
+    }
+}
+
+// ".<name>.tmp-<pid>-<n>" in the same folder: the same file system, so the rename is atomic; the
+// counter keeps two threads of one process writing the same name apart.
+inline std::filesystem::path temporaryPathFor(const std::filesystem::path& file) {
+    static std::atomic<unsigned> counter{0};
+    return file.parent_path() / ("." + file.filename().string() + ".tmp-" +
+                                 std::to_string(::getpid()) + "-" +
+                                 std::to_string(counter.fetch_add(1)));
+}
+
+// Removes the temporary file on scope exit unless the write was committed.
+class TemporaryFile {
+public:
+    explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
+    ~TemporaryFile() {
+        if (!committed_) {
+            std::error_code ec;
+            std::filesystem::remove(path_, ec);
+        }
+    }
+    TemporaryFile(const TemporaryFile&) = delete;
+    TemporaryFile& operator=(const TemporaryFile&) = delete;
+
+    const std::filesystem::path& path() const { return path_; }
+
+    // Renames the temporary file to `file`; throws IoFailure naming `file` if that fails.
+    void commitTo(const std::filesystem::path& file) {
+        std::error_code ec;
+        std::filesystem::rename(path_, file, ec);
+        if (ec) {
+            throw Error(ErrorCode::IoFailure,
+                        file.string() + ": cannot move the finished file into place: " +
+                            ec.message());
+        }
+        committed_ = true;
+    }
+
+private:
+    std::filesystem::path path_;
+    bool committed_ = false;
+};
+
+}  // namespace rtd::io_detail

@@ -1,0 +1,181 @@
+// A folder in the course layout (shared/data/README.md): frame discovery and per-frame reading
+// with the checks that make a bad file fail here, naming it, instead of deep in the denoiser.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include "rtdenoise/error.h"
+#include "rtdenoise/io.h"
+
+namespace rtd {
+namespace {
+
+const std::vector<std::vector<std::string>> kRgb = {{"R"}, {"G"}, {"B"}};
+// Scalar buffers: the course data uses Y; other producers write Z, R or a layer prefix.
+const std::vector<std::vector<std::string>> kDepth = {{"Y", "Z", "R", "depth.Y", "depth.Z"}};
+const std::vector<std::vector<std::string>> kId = {{"Y", "R", "ID.Y", "id.Y"}};
+
+// IDs are stored as floats; anything further than this from an integer is a broken file.
+constexpr float kIdTolerance = 1e-3f;
+
+// The index in "beauty_<i>.exr", or -1 when the name is something else. Only the canonical
+// decimal spelling counts (no sign, no leading zeros), since readFrame builds names that way.
+int beautyIndex(const std::string& name) {
+    constexpr std::string_view prefix = "beauty_";
+    constexpr std::string_view suffix = ".exr";
+    if (name.size() <= prefix.size() + suffix.size() || !name.starts_with(prefix) ||
+        !name.ends_with(suffix)) {
+        return -1;
+    }
+    const std::string_view digits(name.data() + prefix.size(),
+                                  name.size() - prefix.size() - suffix.size());
+    if (digits.size() > 1 && digits[0] == '0') return -1;
+    if (!std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+        return -1;
+    }
+    int index = -1;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), index);
+    if (ec != std::errc() || end != digits.data() + digits.size()) return -1;
+    return index;
+}
+
+// "0..6 and 8..19" for sorted, distinct indices.
+std::string describeRanges(const std::vector<int>& sorted) {
+    std::vector<std::string> ranges;
+    for (std::size_t i = 0; i < sorted.size();) {
+        std::size_t j = i;
+        while (j + 1 < sorted.size() && sorted[j + 1] == sorted[j] + 1) ++j;
+        ranges.push_back(i == j ? std::to_string(sorted[i])
+                                : std::to_string(sorted[i]) + ".." + std::to_string(sorted[j]));
+        i = j + 1;
+    }
+    constexpr std::size_t kShown = 8;
+    std::string out;
+    for (std::size_t i = 0; i < ranges.size() && i < kShown; ++i) {
+        if (i > 0) out += (i + 1 == ranges.size()) ? " and " : ", ";
+        out += ranges[i];
+    }
+    if (ranges.size() > kShown) out += ", ...";
+    return out;
+}
+
+std::string sizeText(const Image& image) {
+    return std::to_string(image.width) + "x" + std::to_string(image.height);
+}
+
+void requireSameSize(const std::filesystem::path& file, const Image& image,
+                     const std::filesystem::path& beautyFile, const Image& beauty) {
+    if (image.width != beauty.width || image.height != beauty.height) {
+        throw Error(ErrorCode::InvalidInput, file.string() + ": " + sizeText(image) + ", but " +
+                                                 beautyFile.string() + " is " + sizeText(beauty));
+    }
+}
+
+}  // namespace
+
+Sequence::Sequence(std::filesystem::path folder) : folder_(std::move(folder)) {
+    std::error_code ec;
+    const auto status = std::filesystem::status(folder_, ec);
+    if (!std::filesystem::exists(status)) {
+        throw Error(ErrorCode::MissingFile, folder_.string() + ": no such folder");
+    }
+    if (!std::filesystem::is_directory(status)) {
+        throw Error(ErrorCode::MissingFile, folder_.string() + ": not a folder");
+    }
+
+    std::vector<int> indices;
+    std::filesystem::directory_iterator it(folder_, ec);
+    for (; !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
+        const int index = beautyIndex(it->path().filename().string());
+        if (index >= 0) indices.push_back(index);
+    }
+    if (ec) {
+        throw Error(ErrorCode::IoFailure, folder_.string() + ": cannot list: " + ec.message());
+    }
+    if (indices.empty()) {
+        throw Error(ErrorCode::MissingFile,
+                    folder_.string() + ": no frames (no beauty_<i>.exr files, i = 0, 1, ...)");
+    }
+    std::sort(indices.begin(), indices.end());
+
+    // Names are unique, so the indices are 0..N-1 exactly when the last one is N-1.
+    if (indices.back() != static_cast<int>(indices.size()) - 1) {
+        int missing = 0;
+        while (missing < static_cast<int>(indices.size()) && indices[missing] == missing) {
+            ++missing;
+        }
+        throw Error(ErrorCode::InvalidInput,
+                    (folder_ / ("beauty_" + std::to_string(missing) + ".exr")).string() +
+                        " is missing: frames " + describeRanges(indices) + " exist");
+    }
+    frameCount_ = static_cast<int>(indices.size());
+}
+
+Frame Sequence::readFrame(int index) const {
+    if (index < 0 || index >= frameCount_) {
+        throw Error(ErrorCode::InvalidArgument,
+                    folder_.string() + ": frame " + std::to_string(index) + " is outside 0.." +
+                        std::to_string(frameCount_ - 1));
+    }
+    const std::string suffix = "_" + std::to_string(index);
+    const auto path = [&](const char* stem, const char* extension) {
+        return folder_ / (stem + suffix + extension);
+    };
+
+    Frame frame;
+    const std::filesystem::path matrixFile = path("matrix", ".mat");
+    MatrixFile matrices = readMatrixFile(matrixFile);
+    frame.objectToWorld = std::move(matrices.objectToWorld);
+    frame.worldToCamera = matrices.worldToCamera;
+    frame.worldToScreen = matrices.worldToScreen;
+
+    const std::filesystem::path beautyFile = path("beauty", ".exr");
+    frame.beauty = readExr(beautyFile, kRgb);
+    const auto readChecked = [&](const std::filesystem::path& file,
+                                 const std::vector<std::vector<std::string>>& channels) {
+        Image image = readExr(file, channels);
+        requireSameSize(file, image, beautyFile, frame.beauty);
+        return image;
+    };
+    frame.normal = readChecked(path("normal", ".exr"), kRgb);
+    frame.position = readChecked(path("position", ".exr"), kRgb);
+    frame.depth = readChecked(path("depth", ".exr"), kDepth);
+
+    const std::filesystem::path idFile = path("ID", ".exr");
+    const Image ids = readChecked(idFile, kId);
+    const auto objectCount = static_cast<std::int64_t>(frame.objectToWorld.size());
+    frame.objectId.resize(ids.pixelCount());
+    for (std::size_t i = 0; i < ids.pixelCount(); ++i) {
+        const float value = ids.pixels[i];
+        const float rounded = std::round(value);
+        const bool integral = std::isfinite(value) && std::abs(value - rounded) <= kIdTolerance;
+        const auto id = integral ? static_cast<std::int64_t>(rounded) : std::int64_t(-2);
+        if (id != -1 && (id < 0 || id >= objectCount)) {
+            const std::string expected =
+                objectCount > 0 ? "-1 or an integer in 0.." + std::to_string(objectCount - 1)
+                                : std::string("-1");
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("{}: pixel ({}, {}) holds object ID {}, expected {} (K = {} "
+                                    "in {})",
+                                    idFile.string(), i % ids.width, i / ids.width, value,
+                                    expected, objectCount, matrixFile.filename().string()));
+        }
+        frame.objectId[i] = static_cast<std::int32_t>(id);
+    }
+
+    const std::filesystem::path albedoFile = path("albedo", ".exr");
+    std::error_code ec;
+    if (std::filesystem::exists(albedoFile, ec)) frame.albedo = readChecked(albedoFile, kRgb);
+    return frame;
+}
+
+}  // namespace rtd

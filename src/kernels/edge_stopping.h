@@ -1,0 +1,31 @@
+// The joint bilateral weight's edge-stopping terms (assignment formula, shared/seeds/001), used by
+// the JBF and the A-Trous filter.
+#pragma once
+
+#include "core/math.h"
+
+namespace rtd {
+
+// 1 / (2 sigma^2) for each term, precomputed on the host.
+struct EdgeStoppingTerms {
+    float colorScale;   // 1 / (2 sigma_color^2)
+    float normalScale;  // 1 / (2 sigma_normal^2)
+    float planeScale;   // 1 / (2 sigma_plane^2)
+};
+
+// Sum of the colour, normal and plane terms of J(i, j) (the exponent without its sign):
+//   |C_i - C_j|^2 / 2sc^2 + acos(n_i . n_j)^2 / 2sn^2 + (n_i . (p_j - p_i)/|p_j - p_i|)^2 / 2sp^2
+// D_plane is 0 where the positions coincide (no division by zero).
+RTD_HOST_DEVICE RTD_INLINE float edgeStoppingExponent(const EdgeStoppingTerms& t, Float3 colorI,
+                                                      Float3 colorJ, Float3 normalI, Float3 normalJ,
+                                                      Float3 positionI, Float3 positionJ) {
+    Float3 dc = colorI - colorJ;
+    float dNormal = acosFast(dot(normalI, normalJ));
+    Float3 dp = positionJ - positionI;
+    float distance2 = dot(dp, dp);
+    float dPlane = distance2 > 1e-20f ? dot(normalI, dp) / std::sqrt(distance2) : 0.0f;
+    return dot(dc, dc) * t.colorScale + dNormal * dNormal * t.normalScale +
+           dPlane * dPlane * t.planeScale;
+}
+
+}  // namespace rtd

@@ -1,0 +1,19 @@
+// Every kernel a device must be able to launch. Adding a kernel: write its per-pixel functor in
+// src/kernels/, add it here; each back end instantiates its launcher from this list.
+#pragma once
+
+#include "kernels/accumulate.h"
+#include "kernels/atrous.h"
+#include "kernels/ingest.h"
+#include "kernels/jbf.h"
+#include "kernels/outlier.h"
+#include "kernels/reproject.h"
+
+#define RTD_FOR_EACH_KERNEL(X) \
+    X(IngestKernel)            \
+    X(PackKernel)              \
+    X(OutlierKernel)           \
+    X(JbfKernel)               \
+    X(AtrousKernel)            \
+    X(ReprojectKernel)         \
+    X(AccumulateKernel)
