@@ -20,9 +20,8 @@ inline void requireParentFolder(const std::filesystem::path& file) {
     if (parent.empty()) return;  // the current folder
     std::error_code ec;
     if (!std::filesystem::is_directory(parent, ec)) {
-        throw Error(ErrorCode::IoFailure,
-                    file.string() + ": cannot write, folder '" + parent.string() +
-                        "' does not exist");
+        throw Error(ErrorCode::IoFailure, file.string() + ": cannot write, folder '" +
+                                              parent.string() + "' does not exist");
     }
 }
 
@@ -30,14 +29,19 @@ inline void requireParentFolder(const std::filesystem::path& file) {
 // counter keeps two threads of one process writing the same name apart.
 inline std::filesystem::path temporaryPathFor(const std::filesystem::path& file) {
     static std::atomic<unsigned> counter{0};
-    return file.parent_path() / ("." + file.filename().string() + ".tmp-" +
-                                 std::to_string(::getpid()) + "-" +
-                                 std::to_string(counter.fetch_add(1)));
+    // Appended piecewise: "literal" + std::string&& trips GCC 12's -Wrestrict false positive.
+    std::string name = ".";
+    name += file.filename().string();
+    name += ".tmp-";
+    name += std::to_string(::getpid());
+    name += "-";
+    name += std::to_string(counter.fetch_add(1));
+    return file.parent_path() / name;
 }
 
 // Removes the temporary file on scope exit unless the write was committed.
 class TemporaryFile {
-public:
+  public:
     explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
     ~TemporaryFile() {
         if (!committed_) {
@@ -55,14 +59,14 @@ public:
         std::error_code ec;
         std::filesystem::rename(path_, file, ec);
         if (ec) {
-            throw Error(ErrorCode::IoFailure,
-                        file.string() + ": cannot move the finished file into place: " +
-                            ec.message());
+            throw Error(
+                ErrorCode::IoFailure,
+                file.string() + ": cannot move the finished file into place: " + ec.message());
         }
         committed_ = true;
     }
 
-private:
+  private:
     std::filesystem::path path_;
     bool committed_ = false;
 };

@@ -67,15 +67,14 @@ Image readExr(const std::filesystem::path& file,
                 }
             }
             if (!found) {
-                throw Error(ErrorCode::InvalidInput,
-                            file.string() + ": missing channel " + quotedList(choices, " or ") +
-                                " (has: " + channelNames(channels) + ")");
+                throw Error(ErrorCode::InvalidInput, file.string() + ": missing channel " +
+                                                         quotedList(choices, " or ") +
+                                                         " (has: " + channelNames(channels) + ")");
             }
             const Imf::Channel* channel = channels.findChannel(*found);
             if (channel->xSampling != 1 || channel->ySampling != 1) {
-                throw Error(ErrorCode::InvalidInput,
-                            file.string() + ": channel '" + *found +
-                                "' is subsampled, which is not supported");
+                throw Error(ErrorCode::InvalidInput, file.string() + ": channel '" + *found +
+                                                         "' is subsampled, which is not supported");
             }
             chosen.push_back(*found);
         }

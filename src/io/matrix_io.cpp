@@ -68,9 +68,9 @@ MatrixFile readMatrixFile(const std::filesystem::path& file) {
     const std::int64_t expected = 4 + (std::int64_t(count) + 2) * kMatrixBytes;
     if (size != expected) {
         throw Error(ErrorCode::InvalidInput,
-                    file.string() + ": K = " + std::to_string(count) + " needs 4 + (K+2)*64 = " +
-                        std::to_string(expected) + " bytes, but the file has " +
-                        std::to_string(size));
+                    file.string() + ": K = " + std::to_string(count) +
+                        " needs 4 + (K+2)*64 = " + std::to_string(expected) +
+                        " bytes, but the file has " + std::to_string(size));
     }
 
     MatrixFile result;

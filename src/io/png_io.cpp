@@ -99,7 +99,8 @@ void writePng(const std::filesystem::path& file, const Image& image) {
     std::vector<unsigned char> bytes(image.pixelCount() * 3);
     for (std::size_t i = 0; i < image.pixelCount(); ++i) {
         for (int c = 0; c < 3; ++c) {
-            bytes[i * 3 + c] = toByte(image.pixels[i * image.channels + (image.channels == 3 ? c : 0)]);
+            bytes[i * 3 + c] =
+                toByte(image.pixels[i * image.channels + (image.channels == 3 ? c : 0)]);
         }
     }
     std::string encoded;

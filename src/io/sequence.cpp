@@ -122,11 +122,12 @@ Sequence::Sequence(std::filesystem::path folder) : folder_(std::move(folder)) {
 
 Frame Sequence::readFrame(int index) const {
     if (index < 0 || index >= frameCount_) {
-        throw Error(ErrorCode::InvalidArgument,
-                    folder_.string() + ": frame " + std::to_string(index) + " is outside 0.." +
-                        std::to_string(frameCount_ - 1));
+        throw Error(ErrorCode::InvalidArgument, folder_.string() + ": frame " +
+                                                    std::to_string(index) + " is outside 0.." +
+                                                    std::to_string(frameCount_ - 1));
     }
-    const std::string suffix = "_" + std::to_string(index);
+    std::string suffix = "_";
+    suffix += std::to_string(index);
     const auto path = [&](const char* stem, const char* extension) {
         return folder_ / (stem + suffix + extension);
     };
@@ -166,8 +167,8 @@ Frame Sequence::readFrame(int index) const {
             throw Error(ErrorCode::InvalidInput,
                         fmt::format("{}: pixel ({}, {}) holds object ID {}, expected {} (K = {} "
                                     "in {})",
-                                    idFile.string(), i % ids.width, i / ids.width, value,
-                                    expected, objectCount, matrixFile.filename().string()));
+                                    idFile.string(), i % ids.width, i / ids.width, value, expected,
+                                    objectCount, matrixFile.filename().string()));
         }
         frame.objectId[i] = static_cast<std::int32_t>(id);
     }

@@ -26,9 +26,8 @@ float linearToSrgb(float x) {
 
 Image toneMap(const Image& linear, float exposure) {
     if (linear.channels != 1 && linear.channels != 3) {
-        throw Error(ErrorCode::InvalidArgument,
-                    "toneMap needs a 1- or 3-channel image, got " +
-                        std::to_string(linear.channels) + " channels");
+        throw Error(ErrorCode::InvalidArgument, "toneMap needs a 1- or 3-channel image, got " +
+                                                    std::to_string(linear.channels) + " channels");
     }
     if (!std::isfinite(exposure) || exposure < 0.0f) {
         throw Error(ErrorCode::InvalidArgument,

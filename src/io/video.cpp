@@ -6,8 +6,8 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -30,7 +30,7 @@ namespace {
 // library must not change the process's signal handling, so the signal is blocked for this
 // thread around pipe operations and a SIGPIPE they raised is consumed before unblocking.
 class SigpipeBlock {
-public:
+  public:
     SigpipeBlock() {
         sigemptyset(&set_);
         sigaddset(&set_, SIGPIPE);
@@ -50,7 +50,7 @@ public:
     SigpipeBlock(const SigpipeBlock&) = delete;
     SigpipeBlock& operator=(const SigpipeBlock&) = delete;
 
-private:
+  private:
     sigset_t set_;
     sigset_t previous_;
     bool wasPending_ = false;
@@ -128,8 +128,9 @@ VideoWriter::VideoWriter(std::filesystem::path file, int width, int height, int 
                         std::to_string(framesPerSecond) + " fps");
     }
     if (!ffmpegAvailable()) {
-        throw Error(ErrorCode::MissingTool,
-                    "ffmpeg not found on PATH: install it (apt-get install ffmpeg) or drop --video");
+        throw Error(
+            ErrorCode::MissingTool,
+            "ffmpeg not found on PATH: install it (apt-get install ffmpeg) or drop --video");
     }
     io_detail::requireParentFolder(file_);
     tempFile_ = io_detail::temporaryPathFor(file_);
@@ -189,8 +190,8 @@ void VideoWriter::addFrame(const Image& displayImage) {
                                     : static_cast<unsigned char>(std::lround(v * 255.0f));
                 }
             }
-            written = std::fwrite(rowBuffer_.data(), 1, rowBuffer_.size(), out) ==
-                      rowBuffer_.size();
+            written =
+                std::fwrite(rowBuffer_.data(), 1, rowBuffer_.size(), out) == rowBuffer_.size();
         }
     }
     if (!written) {
@@ -222,9 +223,9 @@ void VideoWriter::finish() {
         throw Error(ErrorCode::InvalidArgument, file_.string() + ": no frames were added");
     }
     if (code != 0) {
-        throw Error(ErrorCode::IoFailure,
-                    file_.string() + ": ffmpeg failed (exit code " + std::to_string(code) + ")" +
-                        (reason.empty() ? "" : ": " + reason));
+        throw Error(ErrorCode::IoFailure, file_.string() + ": ffmpeg failed (exit code " +
+                                              std::to_string(code) + ")" +
+                                              (reason.empty() ? "" : ": " + reason));
     }
     temporary.commitTo(file_);
 }

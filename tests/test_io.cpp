@@ -1,0 +1,714 @@
+// Known-answer tests of the I/O layer: EXR, .mat, sequence discovery and validation, tone
+// mapping, PNG, video. Each error test checks the error code and that the message names the file.
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
+#include <gtest/gtest.h>
+#include <png.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "rtdenoise/error.h"
+#include "rtdenoise/image.h"
+#include "rtdenoise/io.h"
+
+namespace fs = std::filesystem;
+using rtd::Error;
+using rtd::ErrorCode;
+using rtd::Image;
+using rtd::Matrix4;
+
+namespace {
+
+const std::vector<std::vector<std::string>> kRgb = {{"R"}, {"G"}, {"B"}};
+
+// A fresh folder per test, removed afterwards.
+class TempDir {
+  public:
+    TempDir() {
+        static std::atomic<int> counter{0};
+        path_ = fs::temp_directory_path() /
+                ("rtd_test_io_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+        fs::remove_all(path_);
+        fs::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::permissions(path_, fs::perms::owner_all, fs::perm_options::add, ec);
+        fs::remove_all(path_, ec);
+    }
+    const fs::path& path() const { return path_; }
+    fs::path operator/(const std::string& name) const { return path_ / name; }
+    // Names in the folder, to check that no temporary file was left behind.
+    std::vector<std::string> names() const {
+        std::vector<std::string> out;
+        for (const auto& entry : fs::directory_iterator(path_)) {
+            out.push_back(entry.path().filename().string());
+        }
+        std::sort(out.begin(), out.end());
+        return out;
+    }
+
+  private:
+    fs::path path_;
+};
+
+// Runs `body`, expects an rtd::Error with `code` whose message contains every `parts` entry.
+void expectError(const std::function<void()>& body, ErrorCode code,
+                 const std::vector<std::string>& parts) {
+    try {
+        body();
+        ADD_FAILURE() << "no exception";
+    } catch (const Error& e) {
+        EXPECT_EQ(static_cast<int>(e.code()), static_cast<int>(code)) << e.what();
+        for (const auto& part : parts) {
+            EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+                << "message '" << e.what() << "' lacks '" << part << "'";
+        }
+    }
+}
+
+Image patternImage(int width, int height, int channels, float seed) {
+    Image image(width, height, channels);
+    for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+        image.pixels[i] = seed + 0.37f * float(i) - 0.001f * float(i * i);
+    }
+    return image;
+}
+
+std::string readBytes(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeBytes(const fs::path& file, const std::string& bytes) {
+    std::ofstream out(file, std::ios::binary);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+void appendLe32(std::string& out, std::uint32_t value) {
+    for (int i = 0; i < 4; ++i) out += char((value >> (8 * i)) & 0xff);
+}
+
+// The .mat layout, written independently of the reader.
+std::string matBytes(std::int32_t count, const std::vector<Matrix4>& matrices) {
+    std::string out;
+    appendLe32(out, std::uint32_t(count));
+    for (const auto& matrix : matrices) {
+        for (const auto& row : matrix.m) {
+            for (float v : row) {
+                std::uint32_t bits;
+                std::memcpy(&bits, &v, 4);
+                appendLe32(out, bits);
+            }
+        }
+    }
+    return out;
+}
+
+Matrix4 numbered(float base) {
+    Matrix4 m;
+    for (int r = 0; r < 4; ++r) {
+        for (int c = 0; c < 4; ++c) m.m[r][c] = base + float(4 * r + c);
+    }
+    return m;
+}
+
+// K object matrices numbered from 100, then world-to-camera (200) and world-to-screen (300).
+void writeMat(const fs::path& file, int objectCount) {
+    std::vector<Matrix4> matrices;
+    for (int k = 0; k < objectCount; ++k) matrices.push_back(numbered(100.0f + 16.0f * float(k)));
+    matrices.push_back(numbered(200.0f));
+    matrices.push_back(numbered(300.0f));
+    writeBytes(file, matBytes(objectCount, matrices));
+}
+
+// A course-layout folder of `frames` frames of width x height with K objects; ID(x, y) is
+// (x + y) % K, except pixel (0, 0), which is background (-1).
+void writeSequence(const fs::path& folder, int frames, int width, int height, int objectCount) {
+    for (int i = 0; i < frames; ++i) {
+        const std::string n = std::to_string(i);
+        rtd::writeExr(folder / ("beauty_" + n + ".exr"), patternImage(width, height, 3, float(i)));
+        rtd::writeExr(folder / ("normal_" + n + ".exr"), patternImage(width, height, 3, 2.0f));
+        rtd::writeExr(folder / ("position_" + n + ".exr"), patternImage(width, height, 3, 3.0f));
+        rtd::writeExr(folder / ("depth_" + n + ".exr"), patternImage(width, height, 1, 4.0f));
+        Image ids(width, height, 1);
+        for (int y = 0; y < height; ++y) {
+            for (int x = 0; x < width; ++x) ids.at(x, y) = float((x + y) % objectCount);
+        }
+        ids.at(0, 0) = -1.0f;
+        rtd::writeExr(folder / ("ID_" + n + ".exr"), ids);
+        writeMat(folder / ("matrix_" + n + ".mat"), objectCount);
+    }
+}
+
+// Writes an EXR with OpenEXR directly: channels of the given names and types, data window at
+// (originX, originY); channel c of pixel i holds value(c, i).
+void writeCustomExr(const fs::path& file,
+                    const std::vector<std::pair<std::string, Imf::PixelType>>& channels, int width,
+                    int height, int originX, int originY, Imf::Compression compression,
+                    const std::function<float(int, int)>& value) {
+    Imath::Box2i window(Imath::V2i(originX, originY),
+                        Imath::V2i(originX + width - 1, originY + height - 1));
+    Imf::Header header(Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(63, 63)), window);
+    header.compression() = compression;
+    const std::size_t count = std::size_t(width) * height;
+    std::vector<std::vector<half>> halves(channels.size(), std::vector<half>(count));
+    std::vector<std::vector<float>> floats(channels.size(), std::vector<float>(count));
+    std::vector<std::vector<unsigned>> uints(channels.size(), std::vector<unsigned>(count));
+    Imf::FrameBuffer frameBuffer;
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+        const auto& [name, type] = channels[c];
+        header.channels().insert(name, Imf::Channel(type));
+        for (std::size_t i = 0; i < count; ++i) {
+            const float v = value(int(c), int(i));
+            halves[c][i] = half(v);
+            floats[c][i] = v;
+            uints[c][i] = unsigned(v);
+        }
+        void* base = type == Imf::HALF    ? static_cast<void*>(halves[c].data())
+                     : type == Imf::FLOAT ? static_cast<void*>(floats[c].data())
+                                          : static_cast<void*>(uints[c].data());
+        const std::size_t size = type == Imf::HALF ? 2 : 4;
+        frameBuffer.insert(name, Imf::Slice::Make(type, base, window, size, size * width));
+    }
+    Imf::OutputFile out(file.c_str(), header);
+    out.setFrameBuffer(frameBuffer);
+    out.writePixels(height);
+}
+
+std::array<float, 4> transform(const Matrix4& m, float x, float y, float z) {
+    std::array<float, 4> out{};
+    for (int r = 0; r < 4; ++r) out[r] = m.m[r][0] * x + m.m[r][1] * y + m.m[r][2] * z + m.m[r][3];
+    return out;
+}
+
+}  // namespace
+
+// ---- EXR ----
+
+TEST(Exr, RoundTripIsExact) {
+    TempDir dir;
+    Image rgb = patternImage(7, 5, 3, -2.5f);
+    rgb.pixels[4] = 1e-30f;  // tiny and huge floats survive FLOAT + ZIP unchanged
+    rgb.pixels[5] = 3.4e38f;
+    rtd::writeExr(dir / "rgb.exr", rgb);
+    const Image back = rtd::readExr(dir / "rgb.exr", kRgb);
+    EXPECT_EQ(back.width, 7);
+    EXPECT_EQ(back.height, 5);
+    EXPECT_EQ(back.channels, 3);
+    EXPECT_EQ(back.pixels, rgb.pixels);
+
+    const Image gray = patternImage(3, 4, 1, 0.25f);
+    rtd::writeExr(dir / "gray.exr", gray);
+    EXPECT_EQ(rtd::readExr(dir / "gray.exr", {{"Y"}}).pixels, gray.pixels);
+    // Only the finished files: the temporary names were renamed away.
+    EXPECT_EQ(dir.names(), (std::vector<std::string>{"gray.exr", "rgb.exr"}));
+}
+
+TEST(Exr, ReadsHalfChannelsWithOffsetDataWindow) {
+    TempDir dir;
+    const auto value = [](int c, int i) { return 0.1f * float(i) + 10.0f * float(c); };
+    writeCustomExr(dir / "half.exr", {{"R", Imf::HALF}, {"G", Imf::HALF}, {"B", Imf::HALF}}, 4, 3,
+                   10, 20, Imf::PIZ_COMPRESSION, value);
+    const Image image = rtd::readExr(dir / "half.exr", kRgb);
+    ASSERT_EQ(image.width, 4);
+    ASSERT_EQ(image.height, 3);
+    for (int i = 0; i < 12; ++i) {
+        for (int c = 0; c < 3; ++c) {
+            // The half value, not the float it was made from.
+            EXPECT_EQ(image.pixels[i * 3 + c], float(half(value(c, i)))) << i << " " << c;
+        }
+    }
+    EXPECT_NE(float(half(0.1f)), 0.1f);  // the check above does tell half from float
+}
+
+TEST(Exr, FindsChannelsByNameAmongOthers) {
+    TempDir dir;
+    // Stored order is alphabetical (B, G, R, ...) whatever the insertion order; extra channels.
+    const auto value = [](int c, int i) { return float(100 * c + i); };
+    writeCustomExr(dir / "many.exr",
+                   {{"Z", Imf::FLOAT},
+                    {"B", Imf::HALF},
+                    {"A", Imf::FLOAT},
+                    {"R", Imf::FLOAT},
+                    {"G", Imf::FLOAT},
+                    {"N", Imf::UINT}},
+                   3, 2, 0, 0, Imf::NO_COMPRESSION, value);
+    const Image rgb = rtd::readExr(dir / "many.exr", kRgb);
+    for (int i = 0; i < 6; ++i) {
+        EXPECT_EQ(rgb.pixels[i * 3 + 0], float(300 + i));  // R was the 4th channel written
+        EXPECT_EQ(rgb.pixels[i * 3 + 1], float(400 + i));
+        EXPECT_EQ(rgb.pixels[i * 3 + 2], float(100 + i));
+    }
+    // First match wins: no Y, so Z; a UINT channel comes back as float.
+    const Image scalar = rtd::readExr(dir / "many.exr", {{"Y", "Z", "R"}, {"N"}, {"Z"}});
+    ASSERT_EQ(scalar.channels, 3);
+    for (int i = 0; i < 6; ++i) {
+        EXPECT_EQ(scalar.pixels[i * 3 + 0], float(i));
+        EXPECT_EQ(scalar.pixels[i * 3 + 1], float(500 + i));
+        EXPECT_EQ(scalar.pixels[i * 3 + 2], float(i));  // the same channel twice
+    }
+}
+
+TEST(Exr, MissingChannelNamesFileAndItsChannels) {
+    TempDir dir;
+    const fs::path file = dir / "depth.exr";
+    rtd::writeExr(file, Image(2, 2, 1, 1.0f));
+    expectError([&] { rtd::readExr(file, kRgb); }, ErrorCode::InvalidInput,
+                {file.string(), "missing channel 'R'", "(has: Y)"});
+    expectError(
+        [&] {
+            rtd::readExr(file, {{"Z", "R"}});
+        },
+        ErrorCode::InvalidInput, {file.string(), "'Z' or 'R'", "(has: Y)"});
+}
+
+TEST(Exr, TruncatedOrForeignFileIsIoFailure) {
+    TempDir dir;
+    const fs::path file = dir / "cut.exr";
+    rtd::writeExr(file, patternImage(64, 64, 3, 0.0f));
+    const std::string bytes = readBytes(file);
+    writeBytes(file, bytes.substr(0, bytes.size() / 2));
+    expectError([&] { rtd::readExr(file, kRgb); }, ErrorCode::IoFailure, {file.string()});
+
+    const fs::path text = dir / "text.exr";
+    writeBytes(text, "this is not an EXR file at all");
+    expectError([&] { rtd::readExr(text, kRgb); }, ErrorCode::IoFailure, {text.string()});
+
+    expectError([&] { rtd::readExr(dir / "none.exr", kRgb); }, ErrorCode::MissingFile,
+                {(dir / "none.exr").string()});
+}
+
+TEST(Exr, WriteIntoMissingFolderFailsCleanly) {
+    TempDir dir;
+    const fs::path file = dir / "no" / "such" / "out.exr";
+    expectError([&] { rtd::writeExr(file, Image(2, 2, 3)); }, ErrorCode::IoFailure,
+                {file.string()});
+    EXPECT_TRUE(dir.names().empty());
+    expectError([&] { rtd::writeExr(dir / "two.exr", Image(2, 2, 2)); }, ErrorCode::InvalidArgument,
+                {"two.exr"});
+}
+
+// ---- .mat ----
+
+TEST(Matrix, RoundTrip) {
+    TempDir dir;
+    writeMat(dir / "m.mat", 3);
+    const rtd::MatrixFile read = rtd::readMatrixFile(dir / "m.mat");
+    ASSERT_EQ(read.objectToWorld.size(), 3u);
+    for (int k = 0; k < 3; ++k)
+        EXPECT_EQ(read.objectToWorld[k].m, numbered(100.0f + 16.0f * float(k)).m);
+    EXPECT_EQ(read.worldToCamera.m, numbered(200.0f).m);
+    EXPECT_EQ(read.worldToScreen.m, numbered(300.0f).m);
+    EXPECT_EQ(read.worldToScreen.m[1][2], 306.0f);  // row-major: m[row][col] = base + 4 row + col
+
+    writeMat(dir / "zero.mat", 0);
+    EXPECT_TRUE(rtd::readMatrixFile(dir / "zero.mat").objectToWorld.empty());
+}
+
+TEST(Matrix, BadFilesNameTheFile) {
+    TempDir dir;
+    const fs::path missing = dir / "missing.mat";
+    expectError([&] { rtd::readMatrixFile(missing); }, ErrorCode::MissingFile, {missing.string()});
+
+    const fs::path shortFile = dir / "short.mat";
+    writeBytes(shortFile, std::string("\x01\x00", 2));
+    expectError([&] { rtd::readMatrixFile(shortFile); }, ErrorCode::InvalidInput,
+                {shortFile.string()});
+
+    const fs::path negative = dir / "negative.mat";
+    writeBytes(negative, matBytes(-1, {numbered(0), numbered(0)}));
+    expectError([&] { rtd::readMatrixFile(negative); }, ErrorCode::InvalidInput,
+                {negative.string(), "-1"});
+
+    // K = 3 announced, matrices for K = 2 present: 4 + 5*64 = 324 expected, 260 found.
+    const fs::path mismatch = dir / "mismatch.mat";
+    writeBytes(mismatch, matBytes(3, {numbered(0), numbered(0), numbered(0), numbered(0)}));
+    expectError([&] { rtd::readMatrixFile(mismatch); }, ErrorCode::InvalidInput,
+                {mismatch.string(), "324", "260"});
+
+    // A whole file cut short is a size mismatch too.
+    const fs::path truncated = dir / "truncated.mat";
+    writeMat(truncated, 2);
+    writeBytes(truncated, readBytes(truncated).substr(0, 100));
+    expectError([&] { rtd::readMatrixFile(truncated); }, ErrorCode::InvalidInput,
+                {truncated.string(), "260", "100"});
+
+    const fs::path nan = dir / "nan.mat";
+    Matrix4 bad = numbered(0);
+    bad.m[2][3] = std::numeric_limits<float>::quiet_NaN();
+    writeBytes(nan, matBytes(0, {numbered(0), bad}));
+    expectError([&] { rtd::readMatrixFile(nan); }, ErrorCode::InvalidInput,
+                {nan.string(), "non-finite"});
+}
+
+// ---- sequences ----
+
+TEST(Sequence, DiscoversFramesAndReadsThem) {
+    TempDir dir;
+    writeSequence(dir.path(), 3, 5, 4, 3);
+    writeBytes(dir / "notes.txt", "ignored");
+    writeBytes(dir / "beauty_x.exr", "ignored: not a frame number");
+    const rtd::Sequence sequence(dir.path());
+    EXPECT_EQ(sequence.frameCount(), 3);
+    EXPECT_EQ(sequence.folder(), dir.path());
+
+    const rtd::Frame frame = sequence.readFrame(2);
+    EXPECT_EQ(frame.width(), 5);
+    EXPECT_EQ(frame.height(), 4);
+    EXPECT_EQ(frame.beauty.pixels, patternImage(5, 4, 3, 2.0f).pixels);
+    EXPECT_EQ(frame.normal.pixels, patternImage(5, 4, 3, 2.0f).pixels);
+    EXPECT_EQ(frame.position.pixels, patternImage(5, 4, 3, 3.0f).pixels);
+    EXPECT_EQ(frame.depth.channels, 1);
+    EXPECT_EQ(frame.depth.pixels, patternImage(5, 4, 1, 4.0f).pixels);
+    ASSERT_EQ(frame.objectId.size(), 20u);
+    EXPECT_EQ(frame.objectId[0], -1);
+    EXPECT_EQ(frame.objectId[1], 1);
+    EXPECT_EQ(frame.objectId[5 * 3 + 4], (4 + 3) % 3);
+    ASSERT_EQ(frame.objectToWorld.size(), 3u);
+    EXPECT_EQ(frame.objectToWorld[2].m, numbered(132.0f).m);
+    EXPECT_EQ(frame.worldToCamera.m, numbered(200.0f).m);
+    EXPECT_EQ(frame.worldToScreen.m, numbered(300.0f).m);
+    EXPECT_FALSE(frame.albedo.has_value());
+
+    expectError([&] { sequence.readFrame(3); }, ErrorCode::InvalidArgument, {"3"});
+}
+
+TEST(Sequence, ReadsOptionalAlbedo) {
+    TempDir dir;
+    writeSequence(dir.path(), 2, 4, 3, 2);
+    const Image albedo = patternImage(4, 3, 3, 0.5f);
+    rtd::writeExr(dir / "albedo_1.exr", albedo);
+    const rtd::Sequence sequence(dir.path());
+    EXPECT_FALSE(sequence.readFrame(0).albedo.has_value());
+    const rtd::Frame frame = sequence.readFrame(1);
+    ASSERT_TRUE(frame.albedo.has_value());
+    EXPECT_EQ(frame.albedo->pixels, albedo.pixels);
+
+    rtd::writeExr(dir / "albedo_0.exr", patternImage(3, 3, 3, 0.5f));
+    expectError([&] { sequence.readFrame(0); }, ErrorCode::InvalidInput,
+                {(dir / "albedo_0.exr").string(), "3x3", "4x3"});
+}
+
+TEST(Sequence, FolderProblems) {
+    TempDir dir;
+    const fs::path missing = dir / "nowhere";
+    expectError([&] { rtd::Sequence s(missing); }, ErrorCode::MissingFile, {missing.string()});
+
+    const fs::path file = dir / "file";
+    writeBytes(file, "x");
+    expectError([&] { rtd::Sequence s(file); }, ErrorCode::MissingFile, {file.string()});
+
+    const fs::path empty = dir / "empty";
+    fs::create_directories(empty);
+    expectError([&] { rtd::Sequence s(empty); }, ErrorCode::MissingFile, {empty.string()});
+}
+
+TEST(Sequence, GapInNumberingNamesFirstMissingFrame) {
+    TempDir dir;
+    writeSequence(dir.path(), 6, 2, 2, 1);
+    fs::remove(dir / "beauty_2.exr");
+    fs::remove(dir / "beauty_4.exr");
+    expectError([&] { rtd::Sequence s(dir.path()); }, ErrorCode::InvalidInput,
+                {(dir / "beauty_2.exr").string() + " is missing", "0..1, 3 and 5"});
+
+    fs::remove(dir / "beauty_0.exr");
+    expectError([&] { rtd::Sequence s(dir.path()); }, ErrorCode::InvalidInput,
+                {(dir / "beauty_0.exr").string() + " is missing"});
+}
+
+TEST(Sequence, MissingBufferNamesTheFile) {
+    TempDir dir;
+    writeSequence(dir.path(), 2, 3, 3, 2);
+    fs::remove(dir / "depth_1.exr");
+    const rtd::Sequence sequence(dir.path());
+    EXPECT_NO_THROW(sequence.readFrame(0));
+    expectError([&] { sequence.readFrame(1); }, ErrorCode::MissingFile,
+                {(dir / "depth_1.exr").string()});
+
+    fs::remove(dir / "matrix_0.mat");
+    expectError([&] { sequence.readFrame(0); }, ErrorCode::MissingFile,
+                {(dir / "matrix_0.mat").string()});
+}
+
+TEST(Sequence, SizeMismatchNamesBothFiles) {
+    TempDir dir;
+    writeSequence(dir.path(), 1, 5, 4, 2);
+    rtd::writeExr(dir / "normal_0.exr", patternImage(4, 4, 3, 0.0f));
+    expectError([&] { rtd::Sequence(dir.path()).readFrame(0); }, ErrorCode::InvalidInput,
+                {(dir / "normal_0.exr").string(), "4x4", (dir / "beauty_0.exr").string(), "5x4"});
+}
+
+TEST(Sequence, ObjectIdsMustBeIntegersInRange) {
+    TempDir dir;
+    writeSequence(dir.path(), 1, 5, 4, 2);
+    const fs::path idFile = dir / "ID_0.exr";
+    Image ids(5, 4, 1, 1.0f);
+    ids.at(3, 2) = 2.0f;  // K = 2: only -1, 0 and 1 are valid
+    rtd::writeExr(idFile, ids);
+    expectError([&] { rtd::Sequence(dir.path()).readFrame(0); }, ErrorCode::InvalidInput,
+                {idFile.string(), "(3, 2)", "2", "K = 2"});
+
+    ids.at(3, 2) = 0.5f;
+    ids.at(4, 3) = -7.0f;
+    rtd::writeExr(idFile, ids);
+    expectError([&] { rtd::Sequence(dir.path()).readFrame(0); }, ErrorCode::InvalidInput,
+                {idFile.string(), "(3, 2)", "0.5"});
+
+    ids.at(3, 2) = 1.0001f;  // near enough: stored as float, read as 1
+    ids.at(4, 3) = -1.0f;
+    rtd::writeExr(idFile, ids);
+    const rtd::Frame frame = rtd::Sequence(dir.path()).readFrame(0);
+    EXPECT_EQ(frame.objectId[2 * 5 + 3], 1);
+    EXPECT_EQ(frame.objectId[3 * 5 + 4], -1);
+}
+
+TEST(Sequence, CourseBoxData) {
+    const fs::path folder = fs::path(RTD_SHARED_DIR) / "data" / "box";
+    if (!fs::exists(folder / "beauty_0.exr")) {
+        GTEST_SKIP() << "course data not found at " << folder.string();
+    }
+    const rtd::Sequence sequence(folder);
+    EXPECT_EQ(sequence.frameCount(), 20);
+    const rtd::Frame frame = sequence.readFrame(0);
+    EXPECT_EQ(frame.width(), 512);
+    EXPECT_EQ(frame.height(), 512);
+
+    // The check documented in shared/data/README.md.
+    const float px = frame.position.at(100, 100, 0);
+    const float py = frame.position.at(100, 100, 1);
+    const float pz = frame.position.at(100, 100, 2);
+    EXPECT_NEAR(px, -1.0f, 0.01f);
+    EXPECT_NEAR(py, -0.937f, 0.01f);
+    EXPECT_NEAR(pz, 0.937f, 0.01f);
+    const auto s = transform(frame.worldToScreen, px, py, pz);
+    EXPECT_NEAR(s[0] / s[3], 100.5f, 0.05f);
+    EXPECT_NEAR(s[1] / s[3], 100.5f, 0.05f);
+    EXPECT_NEAR(s[3], 6.0f, 0.01f);
+    EXPECT_NEAR(frame.depth.at(100, 100), s[3], 0.01f);
+
+    EXPECT_EQ(frame.objectToWorld.size(), 7u);
+    bool anyBackground = false;
+    for (int id : frame.objectId) anyBackground |= id == -1;
+    EXPECT_TRUE(anyBackground);
+    EXPECT_NO_THROW(sequence.readFrame(19));
+}
+
+// ---- display ----
+
+TEST(ToneMap, AcesKnownValues) {
+    EXPECT_EQ(rtd::acesFilm(0.0f), 0.0f);
+    EXPECT_NEAR(rtd::acesFilm(1.0f), 2.54f / 3.16f, 1e-6f);  // 0.803797...
+    EXPECT_NEAR(rtd::acesFilm(0.5f), (0.5f * 1.285f) / (0.5f * 1.805f + 0.14f), 1e-6f);
+    EXPECT_EQ(rtd::acesFilm(100.0f), 1.0f);
+    EXPECT_EQ(rtd::acesFilm(1e30f), 1.0f);
+    EXPECT_EQ(rtd::acesFilm(std::numeric_limits<float>::infinity()), 1.0f);
+    EXPECT_EQ(rtd::acesFilm(-1.0f), 0.0f);  // the raw fit would give 1.25 here
+    EXPECT_EQ(rtd::acesFilm(std::nanf("")), 0.0f);
+}
+
+TEST(ToneMap, SrgbKnownValues) {
+    EXPECT_EQ(rtd::linearToSrgb(0.0f), 0.0f);
+    EXPECT_NEAR(rtd::linearToSrgb(1.0f), 1.0f, 1e-6f);
+    EXPECT_NEAR(rtd::linearToSrgb(0.0031308f), 0.04045f, 1e-5f);
+    EXPECT_NEAR(rtd::linearToSrgb(0.001f), 0.01292f, 1e-7f);
+    EXPECT_NEAR(rtd::linearToSrgb(0.5f), 0.735357f, 1e-5f);
+    EXPECT_EQ(rtd::linearToSrgb(-0.5f), 0.0f);
+    EXPECT_EQ(rtd::linearToSrgb(2.0f), 1.0f);
+}
+
+TEST(ToneMap, ImageMapping) {
+    Image gray(2, 1, 1);
+    gray.pixels = {1.0f, std::nanf("")};
+    const Image out = rtd::toneMap(gray, 0.5f);
+    ASSERT_EQ(out.channels, 3);
+    const float expected = rtd::linearToSrgb(rtd::acesFilm(0.5f));
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(out.at(0, 0, c), expected);
+        EXPECT_EQ(out.at(1, 0, c), 0.0f);
+    }
+    Image rgb(1, 1, 3);
+    rgb.pixels = {std::numeric_limits<float>::infinity(), 3e38f, -2.0f};
+    const Image mapped = rtd::toneMap(rgb, 10.0f);
+    EXPECT_EQ(mapped.pixels, (std::vector<float>{0.0f, 1.0f, 0.0f}));
+    expectError([] { rtd::toneMap(Image(1, 1, 2)); }, ErrorCode::InvalidArgument, {"2"});
+    expectError([] { rtd::toneMap(Image(1, 1, 3), -1.0f); }, ErrorCode::InvalidArgument,
+                {"exposure"});
+}
+
+// ---- PNG ----
+
+namespace {
+
+// Reads an 8-bit RGB PNG back with libpng's simplified API.
+bool readPng(const fs::path& file, int& width, int& height, std::vector<unsigned char>& bytes) {
+    png_image image;
+    std::memset(&image, 0, sizeof(image));
+    image.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&image, file.c_str())) return false;
+    image.format = PNG_FORMAT_RGB;
+    bytes.resize(PNG_IMAGE_SIZE(image));
+    if (!png_image_finish_read(&image, nullptr, bytes.data(), 0, nullptr)) return false;
+    width = int(image.width);
+    height = int(image.height);
+    return true;
+}
+
+}  // namespace
+
+TEST(Png, WritesExpectedBytes) {
+    TempDir dir;
+    Image image(3, 2, 3);
+    image.pixels = {0.0f,  1.0f,  0.5f,   2.0f, -1.0f, std::nanf(""), 0.2f, 0.8f,  0.01f,
+                    0.25f, 0.75f, 0.999f, 0.4f, 0.6f,  1.0f,          0.0f, 0.02f, 0.98f};
+    rtd::writePng(dir / "out.png", image);
+    int width = 0;
+    int height = 0;
+    std::vector<unsigned char> bytes;
+    ASSERT_TRUE(readPng(dir / "out.png", width, height, bytes));
+    EXPECT_EQ(width, 3);
+    EXPECT_EQ(height, 2);
+    // round(v * 255), clamped; NaN is 0. The sRGB chunk keeps libpng from converting.
+    EXPECT_EQ(bytes, (std::vector<unsigned char>{0, 255, 128, 255, 0, 0, 51, 204, 3, 64, 191, 255,
+                                                 102, 153, 255, 0, 5, 250}));
+    EXPECT_EQ(dir.names(), std::vector<std::string>{"out.png"});
+}
+
+TEST(Png, UnwritableDestinationIsIoFailure) {
+    TempDir dir;
+    const fs::path missingFolder = dir / "missing" / "out.png";
+    expectError([&] { rtd::writePng(missingFolder, Image(2, 2, 3)); }, ErrorCode::IoFailure,
+                {missingFolder.string()});
+    EXPECT_TRUE(dir.names().empty());
+
+    // /proc refuses new files even for root.
+    const fs::path proc = "/proc/rtd_test_io_cannot_write.png";
+    expectError([&] { rtd::writePng(proc, Image(2, 2, 3)); }, ErrorCode::IoFailure,
+                {proc.string()});
+    EXPECT_FALSE(fs::exists(proc));
+
+    // A read-only folder (root ignores permissions, so only checked for other users).
+    if (::geteuid() != 0) {
+        const fs::path locked = dir / "locked";
+        fs::create_directories(locked);
+        fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
+        expectError([&] { rtd::writePng(locked / "out.png", Image(2, 2, 3)); },
+                    ErrorCode::IoFailure, {(locked / "out.png").string()});
+        fs::permissions(locked, fs::perms::owner_all);
+        EXPECT_TRUE(fs::is_empty(locked));
+    }
+}
+
+TEST(Png, WriteFileAtomicallyReplacesContent) {
+    TempDir dir;
+    const fs::path file = dir / "data.bin";
+    rtd::writeFileAtomically(file, "first version");
+    rtd::writeFileAtomically(file, std::string("second\0version", 14));
+    EXPECT_EQ(readBytes(file), std::string("second\0version", 14));
+    EXPECT_EQ(dir.names(), std::vector<std::string>{"data.bin"});
+}
+
+// ---- video ----
+
+TEST(Video, MissingFfmpegIsMissingTool) {
+    const char* saved = std::getenv("PATH");
+    const std::string path = saved ? saved : "";
+    TempDir dir;
+    ::setenv("PATH", dir.path().c_str(), 1);
+    const bool available = rtd::VideoWriter::ffmpegAvailable();
+    ErrorCode code = ErrorCode::InvalidArgument;
+    std::string message;
+    try {
+        rtd::VideoWriter writer(dir / "v.mp4", 4, 4);
+    } catch (const Error& e) {
+        code = e.code();
+        message = e.what();
+    }
+    ::setenv("PATH", path.c_str(), 1);
+    EXPECT_FALSE(available);
+    EXPECT_EQ(static_cast<int>(code), static_cast<int>(ErrorCode::MissingTool));
+    EXPECT_NE(message.find("ffmpeg not found on PATH"), std::string::npos) << message;
+}
+
+TEST(Video, WritesMp4) {
+    if (!rtd::VideoWriter::ffmpegAvailable()) GTEST_SKIP() << "ffmpeg is not on PATH";
+    TempDir dir;
+    const fs::path file = dir / "it's a video.mp4";  // a quote in the name tests the quoting
+    {
+        rtd::VideoWriter writer(file, 33, 17, 10);  // odd size: ffmpeg pads for yuv420p
+        for (int i = 0; i < 5; ++i) {
+            Image frame(33, 17, 3, 0.2f * float(i));
+            writer.addFrame(frame);
+        }
+        expectError([&] { writer.addFrame(Image(32, 17, 3)); }, ErrorCode::InvalidArgument,
+                    {"32x17"});
+        writer.finish();
+    }
+    ASSERT_TRUE(fs::exists(file));
+    const std::string bytes = readBytes(file);
+    ASSERT_GT(bytes.size(), 100u);
+    EXPECT_EQ(bytes.substr(4, 4), "ftyp");  // an MP4's first box
+    EXPECT_EQ(dir.names(), std::vector<std::string>{"it's a video.mp4"});
+}
+
+TEST(Video, AbandonedVideoLeavesNothing) {
+    if (!rtd::VideoWriter::ffmpegAvailable()) GTEST_SKIP() << "ffmpeg is not on PATH";
+    TempDir dir;
+    {
+        rtd::VideoWriter writer(dir / "v.mp4", 8, 8);
+        writer.addFrame(Image(8, 8, 3, 0.5f));
+    }  // no finish()
+    EXPECT_TRUE(dir.names().empty());
+
+    const fs::path inMissing = dir / "missing" / "v.mp4";
+    expectError([&] { rtd::VideoWriter w(inMissing, 8, 8); }, ErrorCode::IoFailure,
+                {inMissing.string()});
+}
+
+TEST(Video, FailingFfmpegIsIoFailure) {
+    // A stand-in ffmpeg that complains and exits: writes to it hit a closed pipe (SIGPIPE must not
+    // kill the test) and the error carries its message.
+    TempDir dir;
+    const fs::path bin = dir / "bin";
+    fs::create_directories(bin);
+    {
+        std::ofstream script(bin / "ffmpeg");
+        script << "#!/bin/sh\necho 'Unknown encoder libx264' >&2\nexit 3\n";
+    }
+    fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+    const char* saved = std::getenv("PATH");
+    const std::string path = saved ? saved : "";
+    ::setenv("PATH", bin.c_str(), 1);
+    const fs::path file = dir / "v.mp4";
+    ErrorCode code = ErrorCode::InvalidArgument;
+    std::string message;
+    try {
+        rtd::VideoWriter writer(file, 256, 256);
+        for (int i = 0; i < 8; ++i) writer.addFrame(Image(256, 256, 3, 0.5f));
+        writer.finish();
+    } catch (const Error& e) {
+        code = e.code();
+        message = e.what();
+    }
+    ::setenv("PATH", path.c_str(), 1);
+    EXPECT_EQ(static_cast<int>(code), static_cast<int>(ErrorCode::IoFailure)) << message;
+    EXPECT_NE(message.find(file.string()), std::string::npos) << message;
+    EXPECT_NE(message.find("Unknown encoder libx264"), std::string::npos) << message;
+    EXPECT_EQ(dir.names(), std::vector<std::string>{"bin"});
+}
