@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <functional>
 
@@ -30,7 +31,7 @@ Mat4 toMat4(const Matrix4& m) {
 EdgeStoppingTerms edgeTerms(const EdgeStoppingSettings& s) {
     return {1.0f / (2.0f * s.sigmaColor * s.sigmaColor),
             1.0f / (2.0f * s.sigmaNormal * s.sigmaNormal),
-            1.0f / (2.0f * s.sigmaPlane * s.sigmaPlane)};
+            1.0f / (2.0f * s.sigmaPlane * s.sigmaPlane), s.separateObjects ? 1 : 0};
 }
 
 void checkImage(const Image& image, int width, int height, int channels, const char* what) {
@@ -78,6 +79,8 @@ struct Denoiser::Impl {
     FrameStats stats;
 
     int width = 0, height = 0;
+    Layout layout;    // padded planar layout of every device image
+    int padding = 0;  // widest filter reach of this pipeline, in pixels
     int current = 0;  // which of the ping-pong buffers holds this frame's ID and output
     bool hasHistory = false;
 
@@ -116,25 +119,45 @@ struct Denoiser::Impl {
     }
 
     std::size_t pixels() const { return std::size_t(width) * height; }
-    Planes3 planes(const DeviceBuffer<float>& b) const { return {b.data(), pixels()}; }
+    Planes3 planes(const DeviceBuffer<float>& b) const { return {b.data(), layout.planeSize}; }
     GBufferView gbuffer() const {
-        return {width,          height,       planes(normal), planes(position),
-                depth.data(),   objectId[current].data()};
+        return {layout, planes(normal), planes(position), depth.data(), objectId[current].data()};
     }
 
     void allocate(int w, int h) {
+        // Rows padded to whole cache lines; the border (see kernels/views.h) rounded up likewise
+        // so that pixel (0, 0) is aligned.
+        constexpr int kAlign = 16;
+        int border = (padding + kAlign - 1) / kAlign * kAlign;
+        layout.width = w;
+        layout.height = h;
+        layout.padding = border;
+        layout.pitch = (w + 2 * border + kAlign - 1) / kAlign * kAlign;
+        layout.origin = border * layout.pitch + border;
+        long long planeSize = (long long)layout.pitch * (h + 2 * border);
+        if (3 * planeSize > 0x7fffffffLL)
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("frame: {}x{} is too large for one device image", w, h));
+        layout.planeSize = int(planeSize);
         width = w;
         height = h;
-        std::size_t n = pixels();
+        std::size_t n = pixels(), padded = std::size_t(planeSize);
         Device& d = *device;
+        // Zero everywhere, ID -1 everywhere: the border reads as background forever after.
         for (auto* b : {&noisy, &despeckled, &normal, &position, &filtered, &scratch, &reprojected,
-                        &history[0], &history[1]})
-            *b = DeviceBuffer<float>(d, 3 * n);
-        depth = DeviceBuffer<float>(d, n);
-        objectId[0] = DeviceBuffer<std::int32_t>(d, n);
-        objectId[1] = DeviceBuffer<std::int32_t>(d, n);
+                        &history[0], &history[1]}) {
+            *b = DeviceBuffer<float>(d, 3 * padded);
+            d.fill(b->data(), 0, b->bytes());
+        }
+        depth = DeviceBuffer<float>(d, padded);
+        d.fill(depth.data(), 0, depth.bytes());
+        for (auto& ids : objectId) {
+            ids = DeviceBuffer<std::int32_t>(d, padded);
+            d.fill(ids.data(), 0xff, ids.bytes());
+        }
         nonFinite = DeviceBuffer<std::uint8_t>(d, n);
-        validity = DeviceBuffer<std::uint8_t>(d, n);
+        validity = DeviceBuffer<std::uint8_t>(d, padded);
+        d.fill(validity.data(), kReprojectionBackground, validity.bytes());
         if (!d.sharesHostMemory()) {
             stageBeauty = DeviceBuffer<float>(d, 3 * n);
             stageNormal = DeviceBuffer<float>(d, 3 * n);
@@ -156,6 +179,7 @@ struct Denoiser::Impl {
                                           const std::string& inName) {
         const EdgeStoppingTerms edges = edgeTerms(settings.edges);
         if (filter == SpatialFilter::Jbf) {
+            padding = std::max(padding, settings.jbf.radius);
             float coordScale = 1.0f / (2.0f * settings.jbf.sigmaCoord * settings.jbf.sigmaCoord);
             int radius = settings.jbf.radius;
             addPass("jbf", {inName, "normal", "position", "objectId"}, {"filtered"},
@@ -168,6 +192,7 @@ struct Denoiser::Impl {
         }
         // A-Trous levels ping-pong between `filtered` and `scratch`, ending in `filtered`.
         int levels = settings.atrous.passes;
+        padding = std::max(padding, 2 << (levels - 1));  // the last level reaches 2 * 2^(levels-1)
         DeviceBuffer<float>* src = in;
         std::string srcName = inName;
         for (int level = 0; level < levels; ++level) {
@@ -190,6 +215,8 @@ struct Denoiser::Impl {
     }
 
     void buildPipeline() {
+        padding = std::max(settings.outlier.enabled ? settings.outlier.radius : 0,
+                           settings.method == Method::Temporal ? settings.temporal.clampRadius : 0);
         addPass("ingest", {"frame"}, {"noisy", "normal", "position", "depth", "objectId"},
                 [this] { ingest(); });
         DeviceBuffer<float>* in = &noisy;
@@ -219,7 +246,7 @@ struct Denoiser::Impl {
             int radius = settings.temporal.clampRadius;
             addPass("accumulate", {"filtered", "reprojected", "validity"}, {"output", "history"},
                     [this, alpha, k, radius] {
-                        device->launch(AccumulateKernel{width, height, planes(*spatialOutput),
+                        device->launch(AccumulateKernel{gbuffer(), planes(*spatialOutput),
                                                         planes(reprojected), validity.data(),
                                                         planes(history[current]), alpha, k,
                                                         radius},
@@ -231,7 +258,7 @@ struct Denoiser::Impl {
     }
 
     void ingest() {
-        device->launch(IngestKernel{width, height, inBeauty, inNormal, inPosition, inDepth, inId,
+        device->launch(IngestKernel{layout, inBeauty, inNormal, inPosition, inDepth, inId,
                                     planes(noisy), planes(normal), planes(position),
                                     depth.data(), objectId[current].data(), nonFinite.data()},
                        width, height);
@@ -310,7 +337,7 @@ struct Denoiser::Impl {
         DeviceBuffer<float>& result =
             settings.method == Method::Temporal ? history[current] : *spatialOutput;
         float* packTarget = device->sharesHostMemory() ? output.pixels.data() : stageOutput.data();
-        device->launch(PackKernel{width, height, planes(result), packTarget}, width, height);
+        device->launch(PackKernel{layout, planes(result), packTarget}, width, height);
         if (!device->sharesHostMemory())
             device->copyToHost(output.pixels.data(), stageOutput.data(), 3 * n * sizeof(float));
         device->synchronize();
@@ -327,8 +354,11 @@ struct Denoiser::Impl {
     Image reprojectionDebugImage() const {
         Image image(width, height, 3);
         if (settings.method != Method::Temporal || width == 0) return image;
-        std::vector<std::uint8_t> codes(pixels());
-        device->copyToHost(codes.data(), validity.data(), codes.size());
+        std::vector<std::uint8_t> padded(validity.size()), codes(pixels());
+        device->copyToHost(padded.data(), validity.data(), padded.size());
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x)
+                codes[std::size_t(y) * width + x] = padded[layout.index(x, y)];
         static const float colours[5][3] = {
             {0.0f, 1.0f, 0.0f},  // valid: green
             {1.0f, 0.0f, 0.0f},  // outside the screen: red

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <functional>
 
 #include "rtdenoise/settings.h"
@@ -14,6 +15,10 @@ struct Command {
 };
 
 Command addDenoiseCommand(CLI::App& app);
+
+// Sets the options of `command` not given on its command line from a TOML/INI file whose keys
+// are the long option names; throws rtd::Error naming the file for an unknown key or bad value.
+void applyConfigFile(CLI::App& command, const std::filesystem::path& file);
 
 // Registers every denoiser setting as an option of `command` (shared by denoise and bench).
 void addDenoiserOptions(CLI::App& command, DenoiserSettings& settings);

@@ -1,9 +1,11 @@
 // `rtdenoise denoise INPUT_DIR -o OUT_DIR`: reads the sequence (the next frame is read while the
 // current one is filtered), denoises it, writes result_<i>.exr (+ PNG, debug images, MP4).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
+#include <fstream>
 #include <filesystem>
 #include <future>
 #include <map>
@@ -24,6 +26,7 @@ struct DenoiseOptions {
     bool png = false;
     bool debug = false;
     fs::path video;
+    fs::path config;
     int fps = 24;
     float exposure = 1.0f;
     int maxFrames = 0;
@@ -150,6 +153,36 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
 
 }  // namespace
 
+void applyConfigFile(CLI::App& command, const fs::path& file) {
+    std::ifstream in(file);
+    if (!in) throw Error(ErrorCode::MissingFile, file.string() + ": cannot open the config file");
+    std::vector<CLI::ConfigItem> items;
+    try {
+        items = CLI::ConfigTOML().from_config(in);
+    } catch (const CLI::Error& e) {
+        throw Error(ErrorCode::InvalidInput, file.string() + ": " + e.what());
+    }
+    for (const CLI::ConfigItem& item : items) {
+        if (item.name == "++" || item.name == "--") continue;  // section markers
+        std::string key = item.name;
+        std::replace(key.begin(), key.end(), '_', '-');
+        CLI::Option* option = command.get_option_no_throw("--" + key);
+        if (!option || key == "config")
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("{}: unknown setting '{}' (see rtdenoise {} --help)",
+                                    file.string(), item.name, command.get_name()));
+        if (option->count() > 0) continue;  // given on the command line
+        try {
+            option->add_result(item.inputs);
+            option->run_callback();
+        } catch (const CLI::Error& e) {
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("{}: {} = {}: {}", file.string(), item.name,
+                                    fmt::join(item.inputs, " "), e.what()));
+        }
+    }
+}
+
 void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     c.add_option("--method", s.method, "Denoising method")
         ->transform(CLI::CheckedTransformer(kMethods, CLI::ignore_case))
@@ -168,6 +201,8 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
         ->capture_default_str();
     c.add_option("--sigma-plane", s.edges.sigmaPlane, "[>0] plane-distance edge-stopping sigma")
         ->capture_default_str();
+    c.add_flag("--separate-objects,!--no-separate-objects", s.edges.separateObjects,
+               "Pixels of another object ID never contribute to a filtered pixel (on by default)");
     c.add_option("--sigma-coord", s.jbf.sigmaCoord, "[>0] JBF spatial sigma (pixels)")
         ->capture_default_str();
     c.add_option("--radius", s.jbf.radius, "[0,64] JBF kernel half width")
@@ -195,7 +230,10 @@ Command addDenoiseCommand(CLI::App& app) {
     CLI::App* c = app.add_subcommand(
         "denoise", "Denoise a sequence folder (beauty_i.exr, normal_i.exr, position_i.exr, "
                    "depth_i.exr, ID_i.exr, matrix_i.mat) into OUT_DIR/result_<i>.exr");
-    c->set_config("--config", "", "Read options from a TOML/INI file (keys = long option names)");
+    c->add_option("--config", options->config,
+                  "Read options from a TOML/INI file: one `key = value` per line, keys are the long "
+                  "option names (e.g. method = \"jbf\", sigma-color = 0.8); flags given on the "
+                  "command line win");
     c->add_option("INPUT_DIR", options->input, "Folder of the input sequence")->required();
     c->add_option("-o,--output", options->output, "Output folder (created if missing)")
         ->required();
@@ -213,7 +251,11 @@ Command addDenoiseCommand(CLI::App& app) {
     c->add_option("--frames", options->maxFrames, "Denoise only the first N frames (0: all)")
         ->check(CLI::NonNegativeNumber);
     c->add_flag("-q,--quiet", options->quiet, "No progress or summary");
-    return {c, [options, settings] { return runDenoise(*options, *settings); }};
+    return {c, [c, options, settings] {
+                if (!options->config.empty()) applyConfigFile(*c, options->config);
+                validate(*settings);
+                return runDenoise(*options, *settings);
+            }};
 }
 
 }  // namespace rtd::cli

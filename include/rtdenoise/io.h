@@ -26,6 +26,7 @@ struct MatrixFile {
     Matrix4 worldToScreen;
 };
 MatrixFile readMatrixFile(const std::filesystem::path& file);
+void writeMatrixFile(const std::filesystem::path& file, const MatrixFile& matrices);
 
 // A folder in the course layout: beauty_i.exr, normal_i.exr, position_i.exr, depth_i.exr,
 // ID_i.exr, matrix_i.mat, optional albedo_i.exr, for i = 0..frameCount-1.
@@ -47,7 +48,12 @@ private:
 
 // ---- writing ----
 
-// Linear float RGB EXR (ZIP compression). `image` has 3 channels.
+// Writes frame `index` of `frame` in the course layout into `folder` (beauty, normal, position,
+// depth, ID, matrix, and albedo when the frame has one): what Sequence reads back. Creates the
+// folder if needed.
+void writeFrame(const std::filesystem::path& folder, int index, const Frame& frame);
+
+// Linear float EXR (ZIP compression): R,G,B for 3 channels, Y for 1.
 void writeExr(const std::filesystem::path& file, const Image& image);
 // 8-bit RGB PNG of an already display-encoded image (values in [0,1], 3 channels).
 void writePng(const std::filesystem::path& file, const Image& image);

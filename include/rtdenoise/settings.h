@@ -22,6 +22,8 @@ struct EdgeStoppingSettings {
     float sigmaColor = 0.6f;   // [>0] colour distance (RGB, linear) at which weight falls to e^-0.5
     float sigmaNormal = 0.1f;  // [>0] angle between normals (radians), D_normal = acos(n_i . n_j)
     float sigmaPlane = 0.1f;   // [>0] D_plane = n_i . (p_j - p_i) / |p_j - p_i|
+    bool separateObjects = true;  // pixels of another object ID never contribute (an edge the
+                                  // geometry terms alone can miss: touching coplanar objects)
 };
 
 struct JbfSettings {

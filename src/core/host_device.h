@@ -9,3 +9,21 @@
 #define RTD_HOST_DEVICE
 #define RTD_INLINE inline __attribute__((always_inline))
 #endif
+
+// Fully unrolls a short loop with a constant trip count (the 5x5 taps), which lets the CPU
+// compiler vectorise the pixel loop around it.
+#if defined(__CUDACC__)
+#define RTD_UNROLL _Pragma("unroll")
+#elif defined(__clang__)
+#define RTD_UNROLL _Pragma("clang loop unroll(full)")
+#else
+#define RTD_UNROLL _Pragma("GCC unroll 16")
+#endif
+
+// Vectorise the next loop without interleaving several vector iterations: the filters keep four
+// running sums, and interleaving them spills registers.
+#if defined(__clang__) && !defined(__CUDACC__)
+#define RTD_VECTORIZE _Pragma("clang loop vectorize(enable) interleave_count(1)")
+#else
+#define RTD_VECTORIZE
+#endif

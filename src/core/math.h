@@ -53,7 +53,8 @@ RTD_HOST_DEVICE RTD_INLINE bool isFinite(float v) {
 }
 
 // e^x for x <= 0 (the filters' weights): 2^t = 2^floor(t) * p(frac(t)), p a degree-7 polynomial
-// of 2^f on [0,1); relative error below 2e-6. Results under 2^-126 flush to 0.
+// of 2^f on [0,1); relative error below 1e-5 (from rounding x * log2(e) at large |x|), 2e-6
+// for x > -10. Results under 2^-126 flush to 0.
 RTD_HOST_DEVICE RTD_INLINE float expNegative(float x) {
 #if defined(__CUDA_ARCH__)
     return __expf(x);

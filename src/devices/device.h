@@ -22,6 +22,8 @@ public:
     virtual void release(void* pointer) noexcept = 0;
     virtual void copyToDevice(void* deviceDst, const void* hostSrc, std::size_t bytes) = 0;
     virtual void copyToHost(void* hostDst, const void* deviceSrc, std::size_t bytes) = 0;
+    // Sets `bytes` bytes of device memory to `value` (like memset).
+    virtual void fill(void* deviceDst, int value, std::size_t bytes) = 0;
     virtual void synchronize() = 0;
     // Sum of n bytes in device memory (counting flagged pixels).
     virtual long long sumBytes(const std::uint8_t* deviceData, std::size_t n) = 0;

@@ -84,4 +84,20 @@ MatrixFile readMatrixFile(const std::filesystem::path& file) {
     return result;
 }
 
+void writeMatrixFile(const std::filesystem::path& file, const MatrixFile& matrices) {
+    std::string bytes;
+    auto append32 = [&bytes](std::uint32_t v) {
+        for (int b = 0; b < 4; ++b) bytes.push_back(char((v >> (8 * b)) & 0xffu));
+    };
+    auto appendMatrix = [&](const Matrix4& m) {
+        for (int row = 0; row < 4; ++row)
+            for (int col = 0; col < 4; ++col) append32(std::bit_cast<std::uint32_t>(m.m[row][col]));
+    };
+    append32(std::uint32_t(matrices.objectToWorld.size()));
+    for (const Matrix4& m : matrices.objectToWorld) appendMatrix(m);
+    appendMatrix(matrices.worldToCamera);
+    appendMatrix(matrices.worldToScreen);
+    writeFileAtomically(file, bytes);
+}
+
 }  // namespace rtd

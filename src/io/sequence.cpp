@@ -179,4 +179,24 @@ Frame Sequence::readFrame(int index) const {
     return frame;
 }
 
+void writeFrame(const std::filesystem::path& folder, int index, const Frame& frame) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);  // a failure shows at the first write
+    const std::string suffix = "_" + std::to_string(index);
+    const auto path = [&](const char* stem, const char* extension) {
+        return folder / (stem + suffix + extension);
+    };
+    writeExr(path("beauty", ".exr"), frame.beauty);
+    writeExr(path("normal", ".exr"), frame.normal);
+    writeExr(path("position", ".exr"), frame.position);
+    writeExr(path("depth", ".exr"), frame.depth);
+    Image ids(frame.width(), frame.height(), 1);
+    for (std::size_t i = 0; i < ids.pixels.size() && i < frame.objectId.size(); ++i)
+        ids.pixels[i] = float(frame.objectId[i]);
+    writeExr(path("ID", ".exr"), ids);
+    if (frame.albedo) writeExr(path("albedo", ".exr"), *frame.albedo);
+    writeMatrixFile(path("matrix", ".mat"),
+                    MatrixFile{frame.objectToWorld, frame.worldToCamera, frame.worldToScreen});
+}
+
 }  // namespace rtd

@@ -1,6 +1,6 @@
 // Temporal accumulation (assignment formula): C_i = a C_i + (1 - a) Clamp(C_{i-1}), the history
-// clamped per channel to mu +- k sigma of the current filtered frame's neighbourhood; a = 1
-// where the history is invalid.
+// clamped per channel to mu +- k sigma of the current filtered frame's neighbourhood (its object
+// pixels: background and the border do not count); a = 1 where the history is invalid.
 #pragma once
 
 #include "kernels/reproject.h"
@@ -9,37 +9,44 @@
 namespace rtd {
 
 struct AccumulateKernel {
-    int width, height;
+    GBufferView g;
     Planes3 current;      // this frame, spatially filtered
     Planes3 reprojected;  // history at this pixel
     const std::uint8_t* validity;
     Planes3 out;
     float alpha;
     float clampK;
-    int radius;
+    int radius;  // <= layout.padding
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        std::size_t i = std::size_t(y) * width + x;
+        const Layout& L = g.layout;
+        int i = L.index(x, y);
         Float3 c = current.load(i);
         if (validity[i] != kReprojectionValid) {
             out.store(i, c);
             return;
         }
-        Float3 sum, sum2;
+        float sumR = 0.0f, sumG = 0.0f, sumB = 0.0f, sum2R = 0.0f, sum2G = 0.0f, sum2B = 0.0f;
         float count = 0.0f;
-        int x0 = maxi(x - radius, 0), x1 = mini(x + radius, width - 1);
-        int y0 = maxi(y - radius, 0), y1 = mini(y + radius, height - 1);
-        for (int yy = y0; yy <= y1; ++yy) {
-            for (int xx = x0; xx <= x1; ++xx) {
-                Float3 v = current.load(std::size_t(yy) * width + xx);
-                sum += v;
-                sum2 += v * v;
-                count += 1.0f;
+        for (int dy = -radius; dy <= radius; ++dy) {
+            int row = i + L.offset(0, dy);
+            RTD_VECTORIZE
+            for (int dx = -radius; dx <= radius; ++dx) {
+                int j = row + dx;
+                float use = foregroundMask(g.objectId[j]);
+                Float3 v = current.load(j);
+                sumR += use * v.x;
+                sumG += use * v.y;
+                sumB += use * v.z;
+                sum2R += use * v.x * v.x;
+                sum2G += use * v.y * v.y;
+                sum2B += use * v.z * v.z;
+                count += use;
             }
         }
-        float inv = 1.0f / count;
-        Float3 mean = sum * inv;
-        Float3 variance = sum2 * inv - mean * mean;
+        float inv = 1.0f / count;  // count >= 1: a valid pixel is an object pixel
+        Float3 mean = make3(sumR, sumG, sumB) * inv;
+        Float3 variance = make3(sum2R, sum2G, sum2B) * inv - mean * mean;
         Float3 sigma = make3(std::sqrt(maxf(variance.x, 0.0f)), std::sqrt(maxf(variance.y, 0.0f)),
                              std::sqrt(maxf(variance.z, 0.0f)));
         Float3 history = clamp3(reprojected.load(i), mean - sigma * clampK, mean + sigma * clampK);

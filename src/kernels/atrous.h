@@ -8,45 +8,41 @@
 
 namespace rtd {
 
-RTD_HOST_DEVICE RTD_INLINE float b3SplineTap(int offset) {
-    // offset in -2..2
-    return offset == 0 ? 0.375f : (offset == 1 || offset == -1) ? 0.25f : 0.0625f;
-}
-
 struct AtrousKernel {
     GBufferView g;
     Planes3 in, out;
-    int stride;
+    int stride;  // 2 * stride <= layout.padding
     EdgeStoppingTerms edges;
 
+    // Branch-free body (border and background taps get weight 0) so the CPU launcher can
+    // vectorise across neighbouring pixels: their taps are neighbours too (contiguous loads).
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        std::size_t i = g.index(x, y);
+        constexpr float kB3[5] = {0.0625f, 0.25f, 0.375f, 0.25f, 0.0625f};
+        const Layout& L = g.layout;
+        int i = L.index(x, y);
         Float3 ci = in.load(i);
-        if (g.objectId[i] < 0) {
-            out.store(i, ci);
-            return;
-        }
         Float3 ni = g.normal.load(i), pi = g.position.load(i);
+        std::int32_t idI = g.objectId[i];
         Float3 sum;
         float sumW = 0.0f;
-        for (int ty = -2; ty <= 2; ++ty) {
-            int yy = y + ty * stride;
-            if (yy < 0 || yy >= g.height) continue;  // taps outside the image are dropped
-            float hy = b3SplineTap(ty);
-            for (int tx = -2; tx <= 2; ++tx) {
-                int xx = x + tx * stride;
-                if (xx < 0 || xx >= g.width) continue;
-                std::size_t j = g.index(xx, yy);
-                if (g.objectId[j] < 0) continue;
+        RTD_UNROLL
+        for (int ty = 0; ty < 5; ++ty) {
+            RTD_UNROLL
+            for (int tx = 0; tx < 5; ++tx) {
+                int j = i + L.offset((tx - 2) * stride, (ty - 2) * stride);
                 Float3 cj = in.load(j);
                 float exponent = edgeStoppingExponent(edges, ci, cj, ni, g.normal.load(j), pi,
                                                       g.position.load(j));
-                float w = hy * b3SplineTap(tx) * expNegative(-exponent);
+                float w = tapMask(edges, idI, g.objectId[j]) * (kB3[ty] * kB3[tx]) *
+                          expNegative(-exponent);
                 sum += cj * w;
                 sumW += w;
             }
         }
-        out.store(i, sum * (1.0f / sumW));  // sumW >= 9/64: the centre tap
+        // Foreground: sumW >= (3/8)^2, the centre tap. Background passes through.
+        float keep = 1.0f - foregroundMask(idI);
+        float scale = (1.0f - keep) / maxf(sumW, 1e-20f);
+        out.store(i, sum * scale + ci * keep);
     }
 };
 

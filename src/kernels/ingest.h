@@ -1,5 +1,5 @@
-// Frame ingest: the renderer's interleaved RGB buffers into the denoiser's planar ones; NaN/Inf in
-// the radiance become 0 and are flagged so the host can count them.
+// Frame ingest: the renderer's interleaved RGB buffers into the denoiser's padded planar ones;
+// NaN/Inf in the radiance become 0 and are flagged so the host can count them.
 #pragma once
 
 #include "kernels/views.h"
@@ -7,49 +7,50 @@
 namespace rtd {
 
 struct IngestKernel {
-    int width, height;
-    const float* beautyRgb;     // interleaved, 3 floats per pixel
-    const float* normalRgb;     // interleaved
-    const float* positionRgb;   // interleaved
-    const float* depthIn;       // 1 float per pixel
-    const std::int32_t* idIn;   // 1 int per pixel
+    Layout layout;
+    const float* beautyRgb;    // interleaved, 3 floats per pixel, rows of `width` pixels
+    const float* normalRgb;    // interleaved
+    const float* positionRgb;  // interleaved
+    const float* depthIn;      // 1 float per pixel
+    const std::int32_t* idIn;  // 1 int per pixel
     Planes3 beauty, normal, position;
     float* depth;
     std::int32_t* objectId;
-    std::uint8_t* nonFiniteCount;  // per pixel: how many of the 3 radiance values were replaced
+    std::uint8_t* nonFiniteCount;  // per pixel (unpadded): radiance values replaced by 0
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        std::size_t i = std::size_t(y) * width + x;
-        std::uint8_t bad = 0;
+        int s = y * layout.width + x;
+        int i = layout.index(x, y);
+        int bad = 0;
         float c[3];
         for (int k = 0; k < 3; ++k) {
-            float v = beautyRgb[3 * i + k];
+            float v = beautyRgb[3 * s + k];
             bool finite = isFinite(v);
-            bad = std::uint8_t(bad + (finite ? 0 : 1));
+            bad += finite ? 0 : 1;
             c[k] = finite ? v : 0.0f;
         }
         beauty.store(i, make3(c[0], c[1], c[2]));
-        normal.store(i, make3(normalRgb[3 * i], normalRgb[3 * i + 1], normalRgb[3 * i + 2]));
+        normal.store(i, make3(normalRgb[3 * s], normalRgb[3 * s + 1], normalRgb[3 * s + 2]));
         position.store(i,
-                       make3(positionRgb[3 * i], positionRgb[3 * i + 1], positionRgb[3 * i + 2]));
-        depth[i] = depthIn[i];
-        objectId[i] = idIn[i];
-        nonFiniteCount[i] = bad;
+                       make3(positionRgb[3 * s], positionRgb[3 * s + 1], positionRgb[3 * s + 2]));
+        depth[i] = depthIn[s];
+        objectId[i] = idIn[s];
+        nonFiniteCount[s] = std::uint8_t(bad);
     }
 };
 
 // Planar RGB back to the caller's interleaved RGB.
 struct PackKernel {
-    int width, height;
+    Layout layout;
     Planes3 color;
     float* rgbOut;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        std::size_t i = std::size_t(y) * width + x;
-        Float3 c = color.load(i);
-        rgbOut[3 * i] = c.x;
-        rgbOut[3 * i + 1] = c.y;
-        rgbOut[3 * i + 2] = c.z;
+        int s = y * layout.width + x;
+        Float3 c = color.load(layout.index(x, y));
+        rgbOut[3 * s] = c.x;
+        rgbOut[3 * s + 1] = c.y;
+        rgbOut[3 * s + 2] = c.z;
     }
 };
 

@@ -24,15 +24,16 @@ struct ObjectReprojection {
 
 struct ReprojectKernel {
     GBufferView g;                         // current frame
-    const std::int32_t* previousObjectId;  // previous frame's ID buffer
+    const std::int32_t* previousObjectId;  // previous frame's ID buffer (same layout)
     const ObjectReprojection* objects;     // one per object ID of the current frame
     Planes3 history;                       // previous frame's output
     Planes3 reprojected;                   // history sampled at each current pixel
-    std::uint8_t* validity;                // ReprojectionCode per pixel
+    std::uint8_t* validity;                // ReprojectionCode per pixel (same layout)
     int hasHistory;                        // 0 on the first frame: nothing to reproject
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        std::size_t i = g.index(x, y);
+        const Layout& L = g.layout;
+        int i = L.index(x, y);
         std::int32_t id = g.objectId[i];
         reprojected.store(i, Float3{});
         if (id < 0) {
@@ -55,7 +56,7 @@ struct ReprojectKernel {
         }
         // Continuous coordinates in which pixel centres are integers.
         float sx = s.x / s.w - 0.5f, sy = s.y / s.w - 0.5f;
-        if (!(sx > -1.0f && sx < float(g.width) && sy > -1.0f && sy < float(g.height))) {
+        if (!(sx > -1.0f && sx < float(L.width) && sy > -1.0f && sy < float(L.height))) {
             validity[i] = kReprojectionOutsideScreen;
             return;
         }
@@ -66,11 +67,11 @@ struct ReprojectKernel {
         bool anyInside = false;
         for (int t = 0; t < 4; ++t) {
             int tx = x0 + (t & 1), ty = y0 + (t >> 1);
-            if (tx < 0 || ty < 0 || tx >= g.width || ty >= g.height) continue;
+            if (tx < 0 || ty < 0 || tx >= L.width || ty >= L.height) continue;
             float w = ((t & 1) ? fx : 1.0f - fx) * ((t >> 1) ? fy : 1.0f - fy);
             if (w <= 0.0f) continue;
             anyInside = true;
-            std::size_t j = g.index(tx, ty);
+            int j = L.index(tx, ty);
             if (previousObjectId[j] != id) continue;
             sum += history.load(j) * w;
             sumW += w;

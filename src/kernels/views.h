@@ -1,23 +1,39 @@
 // What kernels see of the buffers: raw pointers (host or device) into planar images, so that one
 // channel of neighbouring pixels is contiguous (vector loads on the CPU, coalesced on the GPU).
+//
+// Every planar image has a border of `padding` pixels on each side whose object ID is -1
+// (background) and whose values are 0. Filter taps up to `padding` pixels away therefore need no
+// bounds test: a tap in the border simply has weight 0, which keeps the kernels branch-free.
 #pragma once
 
-#include <cstddef>
 #include <cstdint>
 
 #include "core/math.h"
 
 namespace rtd {
 
-// Three planes of width*height floats: x (or R) plane, then y, then z.
+// Where pixel (x, y) of a width x height image lies in a padded plane.
+struct Layout {
+    int width = 0;
+    int height = 0;
+    int pitch = 0;    // floats per padded row
+    int origin = 0;   // index of pixel (0, 0)
+    int padding = 0;  // border width in pixels
+    int planeSize = 0;
+
+    RTD_HOST_DEVICE RTD_INLINE int index(int x, int y) const { return origin + y * pitch + x; }
+    RTD_HOST_DEVICE RTD_INLINE int offset(int dx, int dy) const { return dy * pitch + dx; }
+};
+
+// Three planes: x (or R), then y, then z, each `planeSize` floats.
 struct Planes3 {
     float* data = nullptr;
-    std::size_t planeSize = 0;
+    int planeSize = 0;
 
-    RTD_HOST_DEVICE RTD_INLINE Float3 load(std::size_t i) const {
+    RTD_HOST_DEVICE RTD_INLINE Float3 load(int i) const {
         return {data[i], data[i + planeSize], data[i + 2 * planeSize]};
     }
-    RTD_HOST_DEVICE RTD_INLINE void store(std::size_t i, Float3 v) const {
+    RTD_HOST_DEVICE RTD_INLINE void store(int i, Float3 v) const {
         data[i] = v.x;
         data[i + planeSize] = v.y;
         data[i + 2 * planeSize] = v.z;
@@ -26,16 +42,14 @@ struct Planes3 {
 
 // The noise-free geometry of one frame.
 struct GBufferView {
-    int width = 0;
-    int height = 0;
+    Layout layout;
     Planes3 normal;
     Planes3 position;
     const float* depth = nullptr;
-    const std::int32_t* objectId = nullptr;  // -1: background
-
-    RTD_HOST_DEVICE RTD_INLINE std::size_t index(int x, int y) const {
-        return std::size_t(y) * std::size_t(width) + std::size_t(x);
-    }
+    const std::int32_t* objectId = nullptr;  // -1: background and border
 };
+
+// 1 for a pixel that holds an object, 0 for background or border (a multiplier, not a branch).
+RTD_HOST_DEVICE RTD_INLINE float foregroundMask(std::int32_t id) { return id >= 0 ? 1.0f : 0.0f; }
 
 }  // namespace rtd

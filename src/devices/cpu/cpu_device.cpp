@@ -32,6 +32,7 @@ public:
     void copyToHost(void* dst, const void* src, std::size_t bytes) override {
         std::memcpy(dst, src, bytes);
     }
+    void fill(void* dst, int value, std::size_t bytes) override { std::memset(dst, value, bytes); }
     void synchronize() override {}
     long long sumBytes(const std::uint8_t* data, std::size_t n) override {
         long long total = 0;

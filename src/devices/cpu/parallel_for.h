@@ -8,6 +8,7 @@ template <class Kernel>
 void parallelFor2D(int width, int height, const Kernel& kernel) {
 #pragma omp parallel for schedule(dynamic, 4)
     for (int y = 0; y < height; ++y) {
+#pragma omp simd
         for (int x = 0; x < width; ++x) kernel(x, y);
     }
 }

@@ -1,0 +1,163 @@
+// The rtdenoise command as a user runs it: outputs, config files, progress, and the errors for
+// bad input (message naming the file, non-zero exit, nothing half-written).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+
+namespace rtd {
+namespace {
+
+struct Result {
+    int exitCode;
+    std::string output;  // stdout and stderr
+};
+
+Result runCli(const std::string& arguments, const std::string& environment = "") {
+    std::string command = environment + " '" + RTD_CLI_PATH + "' " + arguments + " 2>&1";
+    FILE* pipe = popen(command.c_str(), "r");
+    std::string output;
+    std::array<char, 4096> buffer;
+    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe))
+        output.append(buffer.data(), n);
+    int status = pclose(pipe);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// A small moving-object sequence written in the course layout.
+void writeSequence(const fs::path& folder, int frames) {
+    for (int i = 0; i < frames; ++i) {
+        test::SceneDescription d;
+        d.width = 24;
+        d.height = 16;
+        d.objectCount = 2;
+        d.id = [i](int x, int) { return x >= 4 + i && x < 10 + i ? 0 : 1; };
+        d.colour = [](int x, int y) {
+            return std::array<float, 3>{0.1f * (x % 4), 0.5f, 0.1f * (y % 3)};
+        };
+        Frame f = test::makeFrame(d);
+        test::addNoise(f, 0.2f, unsigned(i));
+        f.objectToWorld[0] =
+            test::translation(test::worldShiftForPixels(float(i), 4.0f), 0.0f, 0.0f);
+        writeFrame(folder, i, f);
+    }
+}
+
+TEST(Cli, HelpDocumentsEveryOption) {
+    Result r = runCli("denoise --help");
+    EXPECT_EQ(r.exitCode, 0);
+    for (const char* option :
+         {"--method", "--spatial-filter", "--device", "--sigma-color", "--sigma-normal",
+          "--sigma-plane", "--sigma-coord", "--radius", "--atrous-passes", "--alpha", "--clamp-k",
+          "--clamp-radius", "--outlier", "--outlier-radius", "--outlier-k", "--png", "--exposure",
+          "--video", "--config", "--debug", "--separate-objects"})
+        EXPECT_NE(r.output.find(option), std::string::npos) << option;
+}
+
+TEST(Cli, DenoisesASequenceIntoResultFiles) {
+    test::TempFolder dir("cli-run");
+    writeSequence(dir.path() / "in", 3);
+    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
+                      quoted(dir.path() / "out") + " --png --debug");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (int i = 0; i < 3; ++i) {
+        std::string n = std::to_string(i);
+        EXPECT_TRUE(fs::exists(dir.path() / "out" / ("result_" + n + ".exr")));
+        EXPECT_TRUE(fs::exists(dir.path() / "out" / ("result_" + n + ".png")));
+        EXPECT_TRUE(fs::exists(dir.path() / "out" / ("reprojection_" + n + ".png")));
+    }
+    EXPECT_NE(r.output.find("frame 3/3"), std::string::npos) << r.output;  // progress
+    EXPECT_NE(r.output.find("accumulate"), std::string::npos) << r.output;  // per-pass summary
+    Image result = readExr(dir.path() / "out" / "result_2.exr", {{"R"}, {"G"}, {"B"}});
+    EXPECT_EQ(result.width, 24);
+    EXPECT_EQ(result.height, 16);
+}
+
+TEST(Cli, ConfigFileSetsOptionsAndFlagsOverrideIt) {
+    test::TempFolder dir("cli-config");
+    writeSequence(dir.path() / "in", 2);
+    std::ofstream(dir.path() / "settings.toml") << "method = \"jbf\"\nradius = 3\n";
+    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
+                      quoted(dir.path() / "out") + " --config " +
+                      quoted(dir.path() / "settings.toml"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("method jbf"), std::string::npos) << r.output;
+    r = runCli("denoise " + quoted(dir.path() / "in") + " -o " + quoted(dir.path() / "out") +
+               " --config " + quoted(dir.path() / "settings.toml") + " --method atrous");
+    EXPECT_NE(r.output.find("method atrous"), std::string::npos) << r.output;
+    // A misspelt key is an error naming the file and the key, not silently ignored.
+    std::ofstream(dir.path() / "typo.toml") << "sigma_colour = 2\n";
+    r = runCli("denoise " + quoted(dir.path() / "in") + " -o " + quoted(dir.path() / "out") +
+               " --config " + quoted(dir.path() / "typo.toml"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("typo.toml: unknown setting 'sigma_colour'"), std::string::npos)
+        << r.output;
+}
+
+TEST(Cli, BadInputFailsNamingTheProblem) {
+    test::TempFolder dir("cli-bad");
+    // Missing folder.
+    Result r = runCli("denoise " + quoted(dir.path() / "nothing") + " -o " +
+                      quoted(dir.path() / "out"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("nothing"), std::string::npos) << r.output;
+    // A gap in the numbering.
+    writeSequence(dir.path() / "gap", 3);
+    fs::remove(dir.path() / "gap" / "beauty_1.exr");
+    r = runCli("denoise " + quoted(dir.path() / "gap") + " -o " + quoted(dir.path() / "out"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("beauty_1.exr"), std::string::npos) << r.output;
+    // A truncated matrix file.
+    writeSequence(dir.path() / "mat", 2);
+    fs::resize_file(dir.path() / "mat" / "matrix_1.mat", 100);
+    r = runCli("denoise " + quoted(dir.path() / "mat") + " -o " + quoted(dir.path() / "out2"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("matrix_1.mat"), std::string::npos) << r.output;
+    // Buffers of different sizes.
+    writeSequence(dir.path() / "size", 1);
+    writeExr(dir.path() / "size" / "depth_0.exr", Image(8, 8, 1));
+    r = runCli("denoise " + quoted(dir.path() / "size") + " -o " + quoted(dir.path() / "out3"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("depth_0.exr"), std::string::npos) << r.output;
+    // An output "folder" that is a file.
+    std::ofstream(dir.path() / "file") << "x";
+    r = runCli("denoise " + quoted(dir.path() / "mat") + " -o " + quoted(dir.path() / "file"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("file"), std::string::npos) << r.output;
+    // Unknown method.
+    r = runCli("denoise " + quoted(dir.path() / "mat") + " -o " + quoted(dir.path() / "o") +
+               " --method magic");
+    EXPECT_NE(r.exitCode, 0);
+}
+
+TEST(Cli, VideoWithoutFfmpegIsAClearError) {
+    test::TempFolder dir("cli-video");
+    writeSequence(dir.path() / "in", 1);
+    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
+                          quoted(dir.path() / "out") + " --video " +
+                          quoted(dir.path() / "v.mp4"),
+                      "PATH=/nonexistent");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("ffmpeg"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir.path() / "v.mp4"));
+}
+
+TEST(Cli, WritesAVideoWhenFfmpegIsThere) {
+    if (!VideoWriter::ffmpegAvailable()) GTEST_SKIP() << "ffmpeg is not installed";
+    test::TempFolder dir("cli-video2");
+    writeSequence(dir.path() / "in", 3);
+    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
+                      quoted(dir.path() / "out") + " --video " + quoted(dir.path() / "v.mp4"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_GT(fs::file_size(dir.path() / "v.mp4"), 100u);
+}
+
+}  // namespace
+}  // namespace rtd

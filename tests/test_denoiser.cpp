@@ -1,0 +1,352 @@
+// The Denoiser through its public API, on synthetic frames with known answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_support.h"
+
+namespace rtd {
+namespace {
+
+using test::makeFrame;
+using test::SceneDescription;
+
+const Method kAllMethods[] = {Method::Jbf, Method::Atrous, Method::Temporal};
+
+DenoiserSettings settingsFor(Method method, SpatialFilter filter = SpatialFilter::Atrous) {
+    DenoiserSettings s = test::cpuSettings(method);
+    s.temporal.spatialFilter = filter;
+    s.jbf.radius = 6;  // small synthetic frames
+    return s;
+}
+
+// Two flat walls meeting in a vertical line at x = 16, with different colours.
+SceneDescription twoHalves() {
+    SceneDescription d;
+    d.colour = [](int x, int) {
+        return x < 16 ? std::array<float, 3>{1.0f, 0.2f, 0.2f}
+                      : std::array<float, 3>{0.2f, 0.2f, 1.0f};
+    };
+    return d;
+}
+
+float maxAbsDifference(const Image& a, const Image& b) {
+    float m = 0.0f;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i)
+        m = std::max(m, std::abs(a.pixels[i] - b.pixels[i]));
+    return m;
+}
+
+TEST(Denoiser, ConstantImageIsUnchangedByEveryMethod) {
+    SceneDescription d;
+    d.width = 40;
+    d.height = 24;
+    d.objectCount = 2;
+    // Varied geometry: two objects at different depths, a tilted normal region, background.
+    d.id = [](int x, int y) { return y < 2 ? -1 : (x < 20 ? 0 : 1); };
+    d.depth = [](int x, int) { return x < 20 ? 4.0f : 6.0f; };
+    d.colour = [](int, int) { return std::array<float, 3>{0.25f, 0.5f, 0.75f}; };
+    Frame frame = makeFrame(d);
+    for (Method method : kAllMethods)
+        for (SpatialFilter filter : {SpatialFilter::Jbf, SpatialFilter::Atrous}) {
+            Denoiser denoiser(settingsFor(method, filter));
+            for (int i = 0; i < 3; ++i) {  // temporal: history too
+                Image out = denoiser.processFrame(frame);
+                EXPECT_LT(maxAbsDifference(out, frame.beauty), 1e-5f)
+                    << toString(method) << "/" << toString(filter) << " frame " << i;
+            }
+        }
+}
+
+// Left and right halves differ in colour and in exactly one other way; the filtered left half
+// must not pick up the right half's colour.
+void expectEdgeKept(const SceneDescription& d, const char* what) {
+    Frame frame = makeFrame(d);
+    for (Method method : kAllMethods) {
+        DenoiserSettings s = settingsFor(method);
+        s.edges.sigmaColor = 100.0f;  // colour alone would not stop the blur
+        Denoiser denoiser(s);
+        Image out = denoiser.processFrame(frame);
+        for (int y = 0; y < d.height; ++y) {
+            EXPECT_NEAR(out.at(15, y, 2), 0.2f, 1e-3f) << what << ", " << toString(method);
+            EXPECT_NEAR(out.at(16, y, 0), 0.2f, 1e-3f) << what << ", " << toString(method);
+        }
+    }
+}
+
+TEST(Denoiser, StepEdgeBetweenObjectIdsIsNotBlurred) {
+    SceneDescription d = twoHalves();
+    d.objectCount = 2;
+    d.id = [](int x, int) { return x < 16 ? 0 : 1; };
+    expectEdgeKept(d, "object IDs");
+}
+
+TEST(Denoiser, StepEdgeBetweenNormalsIsNotBlurred) {
+    SceneDescription d = twoHalves();
+    d.normal = [](int x, int) {
+        return x < 16 ? std::array<float, 3>{0.0f, 0.0f, -1.0f}
+                      : std::array<float, 3>{-1.0f, 0.0f, 0.0f};
+    };
+    expectEdgeKept(d, "normals");
+}
+
+TEST(Denoiser, StepEdgeBetweenParallelPlanesIsNotBlurred) {
+    SceneDescription d = twoHalves();
+    d.depth = [](int x, int) { return x < 16 ? 4.0f : 5.0f; };  // same normal, 1 unit apart
+    expectEdgeKept(d, "parallel planes");
+}
+
+TEST(Denoiser, WithoutObjectSeparationTheIdEdgeIsBlurred) {
+    // The control for the ID test above: the same frame does blur when IDs are ignored.
+    SceneDescription d = twoHalves();
+    d.objectCount = 2;
+    d.id = [](int x, int) { return x < 16 ? 0 : 1; };
+    DenoiserSettings s = settingsFor(Method::Jbf);
+    s.edges.sigmaColor = 100.0f;
+    s.edges.separateObjects = false;
+    Denoiser denoiser(s);
+    Image out = denoiser.processFrame(makeFrame(d));
+    EXPECT_GT(out.at(15, 10, 2), 0.3f);
+}
+
+TEST(Denoiser, BackgroundPassesThrough) {
+    SceneDescription d;
+    d.id = [](int x, int) { return x < 8 ? -1 : 0; };
+    d.colour = [](int x, int y) {
+        return std::array<float, 3>{float(x % 3), float(y % 5), 0.5f};
+    };
+    Frame frame = makeFrame(d);
+    for (Method method : kAllMethods) {
+        Denoiser denoiser(settingsFor(method));
+        Image out = denoiser.processFrame(frame);
+        for (int y = 0; y < d.height; ++y)
+            for (int x = 0; x < 8; ++x)
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_EQ(out.at(x, y, c), frame.beauty.at(x, y, c)) << toString(method);
+    }
+}
+
+// The JBF formula evaluated directly, in double precision, with the standard library.
+double referenceJbf(const Frame& f, int x, int y, int c, const DenoiserSettings& s) {
+    auto at3 = [&](const Image& im, int px, int py) {
+        return std::array<double, 3>{im.at(px, py, 0), im.at(px, py, 1), im.at(px, py, 2)};
+    };
+    int w = f.width(), h = f.height();
+    int idI = f.objectId[std::size_t(y) * w + x];
+    if (idI < 0) return f.beauty.at(x, y, c);
+    auto ci = at3(f.beauty, x, y), ni = at3(f.normal, x, y), pi = at3(f.position, x, y);
+    double sum = 0.0, sumW = 0.0;
+    int r = s.jbf.radius;
+    for (int py = std::max(0, y - r); py <= std::min(h - 1, y + r); ++py)
+        for (int px = std::max(0, x - r); px <= std::min(w - 1, x + r); ++px) {
+            if (f.objectId[std::size_t(py) * w + px] != idI) continue;
+            auto cj = at3(f.beauty, px, py), nj = at3(f.normal, px, py),
+                 pj = at3(f.position, px, py);
+            double dc2 = 0, dot = 0, dp2 = 0, along = 0;
+            for (int k = 0; k < 3; ++k) {
+                dc2 += (ci[k] - cj[k]) * (ci[k] - cj[k]);
+                dot += ni[k] * nj[k];
+                dp2 += (pj[k] - pi[k]) * (pj[k] - pi[k]);
+                along += ni[k] * (pj[k] - pi[k]);
+            }
+            double dNormal = std::acos(std::clamp(dot, -1.0, 1.0));
+            double dPlane = dp2 > 0 ? along / std::sqrt(dp2) : 0.0;
+            auto sq = [](double v) { return v * v; };
+            double weight = std::exp(
+                -(sq(px - x) + sq(py - y)) / (2 * sq(s.jbf.sigmaCoord)) -
+                dc2 / (2 * sq(s.edges.sigmaColor)) - sq(dNormal) / (2 * sq(s.edges.sigmaNormal)) -
+                sq(dPlane) / (2 * sq(s.edges.sigmaPlane)));
+            sum += weight * cj[c];
+            sumW += weight;
+        }
+    return sum / sumW;
+}
+
+TEST(Denoiser, JbfEqualsTheFormulaEvaluatedDirectly) {
+    // A curved, noisy, multi-object scene so that every term matters.
+    SceneDescription d;
+    d.width = 48;
+    d.height = 40;
+    d.objectCount = 2;
+    d.id = [](int x, int y) { return (x - 30) * (x - 30) + (y - 20) * (y - 20) < 100 ? 1 : 0; };
+    d.depth = [](int x, int y) { return 4.0f + 0.02f * x + 0.01f * y * y / 40.0f; };
+    d.normal = [](int x, int y) {
+        float nx = 0.3f * std::sin(0.2f * x), ny = 0.2f * std::cos(0.15f * y);
+        float len = std::sqrt(nx * nx + ny * ny + 1.0f);
+        return std::array<float, 3>{nx / len, ny / len, -1.0f / len};
+    };
+    d.colour = [](int x, int y) {
+        return std::array<float, 3>{0.5f + 0.4f * std::sin(0.7f * x), 0.4f, 0.3f + 0.01f * y};
+    };
+    Frame frame = makeFrame(d);
+    test::addNoise(frame, 0.3f, 7);
+    DenoiserSettings s = settingsFor(Method::Jbf);
+    s.outlier.enabled = false;
+    s.jbf.radius = 8;
+    s.jbf.sigmaCoord = 4.0f;
+    s.edges.sigmaNormal = 0.3f;
+    s.edges.sigmaPlane = 0.3f;
+    Denoiser denoiser(s);
+    Image out = denoiser.processFrame(frame);
+    for (int y = 0; y < d.height; y += 3)
+        for (int x = 0; x < d.width; x += 5)
+            for (int c = 0; c < 3; ++c) {
+                double expected = referenceJbf(frame, x, y, c, s);
+                EXPECT_NEAR(out.at(x, y, c), expected, 1e-4 * std::max(1.0, std::abs(expected)))
+                    << "pixel (" << x << ", " << y << ") channel " << c;
+            }
+}
+
+// Temporal settings in which the output is exactly the reprojected history (alpha 0, no clamp,
+// identity spatial filter): what the history holds shows where each pixel was sampled.
+DenoiserSettings pureHistorySettings() {
+    DenoiserSettings s = test::cpuSettings(Method::Temporal);
+    s.temporal.spatialFilter = SpatialFilter::Jbf;
+    s.jbf.radius = 0;
+    s.outlier.enabled = false;
+    s.temporal.alpha = 0.0f;
+    s.temporal.clampK = 1e6f;
+    return s;
+}
+
+std::array<float, 3> gradientColour(int x, int y) {
+    return {float(x), float(y), float(x * 100 + y)};
+}
+
+TEST(Reprojection, EqualMatricesMapEveryPixelToItself) {
+    SceneDescription d;
+    d.depth = [](int x, int y) { return 3.0f + 0.05f * x + 0.03f * y; };
+    d.colour = gradientColour;
+    Frame frame = makeFrame(d);
+    Denoiser denoiser(pureHistorySettings());
+    Image first = denoiser.processFrame(frame);
+    EXPECT_EQ(maxAbsDifference(first, frame.beauty), 0.0f);
+    Frame second = frame;
+    // The current frame must not show (alpha 0); it varies so that the clamp window is wide.
+    for (float& v : second.beauty.pixels) v = -v;
+    Image out = denoiser.processFrame(second);
+    EXPECT_LT(maxAbsDifference(out, frame.beauty), 1e-3f);
+    Image debug = denoiser.reprojectionDebugImage();
+    for (int y = 0; y < d.height; ++y)
+        for (int x = 0; x < d.width; ++x) EXPECT_EQ(debug.at(x, y, 1), 1.0f);  // green: valid
+}
+
+TEST(Reprojection, KnownObjectTranslationFetchesTheShiftedPixel) {
+    // Object 0 (x in [8, 20)) moves 3 pixels right over a static wall (object 1).
+    const int shift = 3;
+    const float z = 4.0f;
+    auto scene = [&](int offset) {
+        SceneDescription d;
+        d.objectCount = 2;
+        d.id = [offset](int x, int) { return x >= 8 + offset && x < 20 + offset ? 0 : 1; };
+        d.depth = [z](int, int) { return z; };
+        d.colour = gradientColour;
+        return d;
+    };
+    Frame previous = makeFrame(scene(0));
+    Frame current = makeFrame(scene(shift));
+    current.objectToWorld[0] = test::translation(test::worldShiftForPixels(shift, z), 0, 0);
+    Denoiser denoiser(pureHistorySettings());
+    denoiser.processFrame(previous);
+    Image out = denoiser.processFrame(current);
+    Image debug = denoiser.reprojectionDebugImage();
+    for (int y = 0; y < 32; ++y) {
+        for (int x = 8 + shift; x < 20 + shift; ++x) {  // on the object: from x - shift
+            EXPECT_NEAR(out.at(x, y, 0), float(x - shift), 1e-3f) << x << "," << y;
+            EXPECT_EQ(debug.at(x, y, 1), 1.0f);
+        }
+        for (int x = 8; x < 8 + shift; ++x) {  // wall uncovered: last frame held the object
+            EXPECT_EQ(debug.at(x, y, 0), 1.0f);  // yellow: other object
+            EXPECT_EQ(debug.at(x, y, 1), 1.0f);
+            EXPECT_EQ(debug.at(x, y, 2), 0.0f);
+        }
+    }
+}
+
+TEST(Reprojection, ObjectMovingOverBackgroundLeavesInvalidHistoryBehind) {
+    // Object 0 over background moves 4 pixels left: the pixels it leaves are background now
+    // (no history: blue), every pixel of the object finds itself in the last frame (green).
+    const float z = 4.0f;
+    auto scene = [&](int left) {
+        SceneDescription d;
+        d.id = [left](int x, int) { return x >= left && x < left + 10 ? 0 : -1; };
+        d.depth = [z](int, int) { return z; };
+        d.colour = gradientColour;
+        return d;
+    };
+    Frame previous = makeFrame(scene(14));
+    Frame current = makeFrame(scene(10));
+    current.objectToWorld[0] = test::translation(test::worldShiftForPixels(-4, z), 0, 0);
+    DenoiserSettings s = pureHistorySettings();
+    Denoiser denoiser(s);
+    denoiser.processFrame(previous);
+    denoiser.processFrame(current);
+    Image debug = denoiser.reprojectionDebugImage();
+    for (int x = 20; x < 24; ++x) {  // uncovered: background now
+        EXPECT_EQ(debug.at(x, 5, 2), 1.0f);
+        EXPECT_EQ(debug.at(x, 5, 1), 0.0f);
+    }
+    for (int x = 10; x < 20; ++x) EXPECT_EQ(debug.at(x, 5, 1), 1.0f);  // object: valid
+    // Outside the screen: shift the camera so that history falls off the left edge.
+    Frame moved = current;
+    moved.objectToWorld[0] = test::translation(test::worldShiftForPixels(-40, z), 0, 0);
+    denoiser.processFrame(moved);
+    debug = denoiser.reprojectionDebugImage();
+    EXPECT_EQ(debug.at(12, 5, 0), 1.0f);  // red: outside the screen
+    EXPECT_EQ(debug.at(12, 5, 1), 0.0f);
+}
+
+TEST(Denoiser, NonFiniteRadianceIsReplacedAndCounted) {
+    SceneDescription d;
+    Frame frame = makeFrame(d);
+    frame.beauty.at(3, 4, 0) = std::nanf("");
+    frame.beauty.at(5, 6, 1) = INFINITY;
+    frame.beauty.at(7, 8, 2) = -INFINITY;
+    for (Method method : kAllMethods) {
+        Denoiser denoiser(settingsFor(method));
+        Image out = denoiser.processFrame(frame);
+        EXPECT_EQ(denoiser.lastFrameStats().nonFiniteReplaced, 3);
+        for (float v : out.pixels) ASSERT_TRUE(std::isfinite(v)) << toString(method);
+    }
+}
+
+TEST(Denoiser, InconsistentFramesAreRejectedWithAReason) {
+    SceneDescription d;
+    Frame good = makeFrame(d);
+    Denoiser denoiser(settingsFor(Method::Temporal));
+    Frame badSize = good;
+    badSize.normal = Image(16, 16, 3);
+    EXPECT_THROW(denoiser.processFrame(badSize), Error);
+    Frame badId = good;
+    badId.objectId[5] = 1;  // K = 1
+    try {
+        denoiser.processFrame(badId);
+        FAIL() << "an ID outside 0..K-1 was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+        EXPECT_NE(std::string(e.what()).find("outside -1..0"), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(denoiser.processFrame(good));
+}
+
+TEST(Denoiser, SettingsOutOfRangeAreRejected) {
+    DenoiserSettings s = settingsFor(Method::Jbf);
+    s.edges.sigmaColor = 0.0f;
+    EXPECT_THROW(Denoiser{s}, Error);
+    s = settingsFor(Method::Temporal);
+    s.temporal.alpha = 1.5f;
+    EXPECT_THROW(Denoiser{s}, Error);
+}
+
+TEST(Denoiser, PassesAreListedWithTheirBuffers) {
+    Denoiser temporal(settingsFor(Method::Temporal));
+    std::vector<std::string> names;
+    for (const PassInfo& p : temporal.passes()) names.push_back(p.name);
+    std::vector<std::string> expected{"ingest", "outlier", "atrous0", "atrous1", "atrous2",
+                                      "atrous3", "atrous4", "reproject", "accumulate"};
+    EXPECT_EQ(names, expected);
+    EXPECT_EQ(temporal.passes()[7].outputs, (std::vector<std::string>{"reprojected", "validity"}));
+}
+
+}  // namespace
+}  // namespace rtd

@@ -1,0 +1,176 @@
+// Kernel-level known answers: the fast math against the standard library, the A-Trous tap
+// positions per level, the history clamp and blend, firefly removal. Kernels run on the CPU
+// device over padded buffers built here.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "devices/device.h"
+
+namespace rtd {
+namespace {
+
+TEST(FastMath, ExpMatchesStdExpOverTheFilterRange) {
+    for (float x = -87.0f; x <= 0.0f; x += 0.0137f) {
+        float expected = std::exp(x);
+        EXPECT_NEAR(expNegative(x), expected, (x > -10.0f ? 2e-6f : 1e-5f) * expected + 1e-37f)
+            << "x = " << x;
+    }
+    EXPECT_EQ(expNegative(0.0f), 1.0f);
+    EXPECT_EQ(expNegative(-1e4f), expNegative(-1e4f));  // finite, no NaN for huge exponents
+    EXPECT_LT(expNegative(-1e4f), 1e-37f);
+}
+
+TEST(FastMath, AcosMatchesStdAcos) {
+    for (float x = -1.0f; x <= 1.0f; x += 0.001f)
+        EXPECT_NEAR(acosFast(x), std::acos(x), 2e-6f) << "x = " << x;
+    EXPECT_NEAR(acosFast(1.0000001f), 0.0f, 1e-6f);  // dot products slightly above 1
+    EXPECT_NEAR(acosFast(-1.0000001f), 3.14159265f, 1e-6f);
+}
+
+TEST(FastMath, MatrixInverseRoundTrips) {
+    Mat4 a{{{2, 0, 0, 1}, {0, 3, 0, 2}, {0, 0, 4, 3}, {0, 0, 0, 1}}};
+    Mat4 inverse;
+    ASSERT_TRUE(invert(a, inverse));
+    Mat4 product = multiply(a, inverse);
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) EXPECT_NEAR(product.m[i][j], i == j ? 1.0f : 0.0f, 1e-6f);
+    Mat4 singular{};
+    EXPECT_FALSE(invert(singular, inverse));
+}
+
+// Padded planar buffers for a w x h image, as the Denoiser lays them out.
+struct Harness {
+    std::unique_ptr<Device> device = createCpuDevice();
+    Layout layout;
+    DeviceBuffer<float> normal, position, depth, a, b, c;
+    DeviceBuffer<std::int32_t> ids;
+    DeviceBuffer<std::uint8_t> validity;
+
+    Harness(int w, int h, int padding) {
+        layout.width = w;
+        layout.height = h;
+        layout.padding = padding;
+        layout.pitch = w + 2 * padding;
+        layout.origin = padding * layout.pitch + padding;
+        layout.planeSize = layout.pitch * (h + 2 * padding);
+        std::size_t n = std::size_t(layout.planeSize);
+        for (auto* buffer : {&normal, &position, &a, &b, &c}) {
+            *buffer = DeviceBuffer<float>(*device, 3 * n);
+            device->fill(buffer->data(), 0, buffer->bytes());
+        }
+        depth = DeviceBuffer<float>(*device, n);
+        ids = DeviceBuffer<std::int32_t>(*device, n);
+        device->fill(ids.data(), 0xff, ids.bytes());
+        validity = DeviceBuffer<std::uint8_t>(*device, n);
+        // A flat wall facing the camera, one object.
+        Planes3 nrm = planes(normal), pos = planes(position);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                int i = layout.index(x, y);
+                nrm.store(i, make3(0, 0, -1));
+                pos.store(i, make3(float(x), float(y), 5.0f));
+                ids.data()[i] = 0;
+            }
+    }
+    Planes3 planes(const DeviceBuffer<float>& buffer) const {
+        return {buffer.data(), layout.planeSize};
+    }
+    GBufferView gbuffer() const {
+        return {layout, planes(normal), planes(position), depth.data(), ids.data()};
+    }
+    void setAll(const DeviceBuffer<float>& buffer, Float3 v) {
+        for (int y = 0; y < layout.height; ++y)
+            for (int x = 0; x < layout.width; ++x) planes(buffer).store(layout.index(x, y), v);
+    }
+};
+
+EdgeStoppingTerms wideOpenTerms() {
+    // Colour sigma so large that the colour term vanishes: weights are the B3 taps alone.
+    return {1e-12f, 1.0f / (2.0f * 0.1f * 0.1f), 1.0f / (2.0f * 0.1f * 0.1f), 1};
+}
+
+TEST(Atrous, TapsLieAtMultiplesOfTheStrideWithB3Weights) {
+    const float b3[5] = {1 / 16.0f, 1 / 4.0f, 3 / 8.0f, 1 / 4.0f, 1 / 16.0f};
+    for (int stride : {1, 2, 4, 8, 16}) {
+        const int size = 4 * stride + 9, centre = size / 2;
+        Harness h(size, size, 2 * stride);
+        h.setAll(h.a, make3(0, 0, 0));
+        h.planes(h.a).store(h.layout.index(centre, centre), make3(1, 1, 1));  // impulse
+        h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride,
+                                      wideOpenTerms()},
+                         size, size);
+        // Away from the border every pixel has all 25 taps, so the weights sum to 1 and the
+        // output at offset (dx, dy) from the impulse is b3[dx] * b3[dy] on the stride lattice.
+        for (int y = 2 * stride; y < size - 2 * stride; ++y)
+            for (int x = 2 * stride; x < size - 2 * stride; ++x) {
+                int dx = centre - x, dy = centre - y;
+                float expected = 0.0f;
+                if (dx % stride == 0 && dy % stride == 0 && std::abs(dx) <= 2 * stride &&
+                    std::abs(dy) <= 2 * stride)
+                    expected = b3[dx / stride + 2] * b3[dy / stride + 2];
+                float got = h.planes(h.b).load(h.layout.index(x, y)).x;
+                EXPECT_NEAR(got, expected, 1e-6f)
+                    << "stride " << stride << " at offset (" << dx << ", " << dy << ")";
+            }
+    }
+}
+
+TEST(Atrous, ConstantImageIsUnchangedAtTheBorderToo) {
+    Harness h(20, 12, 8);
+    h.setAll(h.a, make3(0.3f, 0.6f, 0.9f));
+    h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 4,
+                                  EdgeStoppingTerms{1.39f, 50.0f, 50.0f, 1}},
+                     20, 12);
+    for (int y = 0; y < 12; ++y)
+        for (int x = 0; x < 20; ++x) {
+            Float3 v = h.planes(h.b).load(h.layout.index(x, y));
+            EXPECT_NEAR(v.x, 0.3f, 1e-6f);
+            EXPECT_NEAR(v.y, 0.6f, 1e-6f);
+            EXPECT_NEAR(v.z, 0.9f, 1e-6f);
+        }
+}
+
+TEST(Accumulate, ClampsHistoryToMeanPlusMinusKSigmaThenBlends) {
+    // 3x3 image, radius 1: the centre's neighbourhood is the whole image.
+    Harness h(3, 3, 1);
+    const float values[9] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+    for (int i = 0; i < 9; ++i)
+        h.planes(h.a).store(h.layout.index(i % 3, i / 3), make3(values[i], values[i], 1.0f));
+    // History: far above in R, far below in G, inside the range in B.
+    h.planes(h.b).store(h.layout.index(1, 1), make3(100.0f, -100.0f, 1.0f));
+    for (int i = 0; i < h.layout.planeSize; ++i) h.validity.data()[i] = kReprojectionValid;
+    const float alpha = 0.2f, k = 1.5f;
+    h.device->launch(AccumulateKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b),
+                                      h.validity.data(), h.planes(h.c), alpha, k, 1},
+                     3, 3);
+    const float mean = 5.0f, sigma = std::sqrt(60.0f / 9.0f);  // population stddev of 1..9
+    Float3 out = h.planes(h.c).load(h.layout.index(1, 1));
+    EXPECT_NEAR(out.x, alpha * 5.0f + (1 - alpha) * (mean + k * sigma), 1e-4f);
+    EXPECT_NEAR(out.y, alpha * 5.0f + (1 - alpha) * (mean - k * sigma), 1e-4f);
+    EXPECT_NEAR(out.z, 1.0f, 1e-6f);  // sigma 0: history equals the mean, kept
+
+    // Invalid history: a = 1, the current value passes unchanged.
+    h.validity.data()[h.layout.index(1, 1)] = kReprojectionOtherObject;
+    h.device->launch(AccumulateKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b),
+                                      h.validity.data(), h.planes(h.c), alpha, k, 1},
+                     3, 3);
+    EXPECT_EQ(h.planes(h.c).load(h.layout.index(1, 1)).x, 5.0f);
+}
+
+TEST(Outlier, FireflyIsClampedToMeanPlusTwoSigmaOthersKept) {
+    Harness h(7, 7, 3);
+    h.setAll(h.a, make3(1.0f, 1.0f, 1.0f));
+    h.planes(h.a).store(h.layout.index(3, 3), make3(50.0f, 50.0f, 50.0f));
+    h.device->launch(OutlierKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 3, 2.0f}, 7, 7);
+    // Window of the firefly: 48 ones and one 50 (luminance = value for grey).
+    double mean = (48.0 + 50.0) / 49.0;
+    double variance = (48.0 + 2500.0) / 49.0 - mean * mean;
+    double limit = mean + 2.0 * std::sqrt(variance);
+    EXPECT_NEAR(h.planes(h.b).load(h.layout.index(3, 3)).x, limit, 1e-3);
+    EXPECT_EQ(h.planes(h.b).load(h.layout.index(0, 0)).x, 1.0f);  // neighbour below its limit
+}
+
+}  // namespace
+}  // namespace rtd

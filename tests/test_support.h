@@ -1,0 +1,121 @@
+// Synthetic frames with known geometry for the tests: a pinhole camera at the origin looking
+// down +z, fronto-parallel surfaces, per-pixel IDs and colours from callbacks.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <random>
+#include <string>
+#include <unistd.h>
+
+#include "rtdenoise/rtdenoise.h"
+
+namespace rtd::test {
+
+constexpr float kFocal = 64.0f;  // pixels
+
+// pixel = (f x / z + w/2, f y / z + h/2), s.w = z: the convention of shared/data/README.md.
+inline Matrix4 pinholeWorldToScreen(int width, int height) {
+    Matrix4 m;
+    m.m[0] = {kFocal, 0.0f, 0.5f * float(width), 0.0f};
+    m.m[1] = {0.0f, kFocal, 0.5f * float(height), 0.0f};
+    m.m[2] = {0.0f, 0.0f, 1.0f, 0.0f};
+    m.m[3] = {0.0f, 0.0f, 1.0f, 0.0f};
+    return m;
+}
+
+inline Matrix4 translation(float x, float y, float z) {
+    Matrix4 m = Matrix4::identity();
+    m.m[0][3] = x;
+    m.m[1][3] = y;
+    m.m[2][3] = z;
+    return m;
+}
+
+// World x offset that moves a point at depth z by `pixels` pixels on screen.
+inline float worldShiftForPixels(float pixels, float z) { return pixels * z / kFocal; }
+
+struct SceneDescription {
+    int width = 32;
+    int height = 32;
+    int objectCount = 1;
+    std::function<int(int, int)> id = [](int, int) { return 0; };
+    std::function<float(int, int)> depth = [](int, int) { return 4.0f; };
+    std::function<std::array<float, 3>(int, int)> normal = [](int, int) {
+        return std::array<float, 3>{0.0f, 0.0f, -1.0f};
+    };
+    std::function<std::array<float, 3>(int, int)> colour = [](int, int) {
+        return std::array<float, 3>{0.5f, 0.5f, 0.5f};
+    };
+};
+
+// Positions are the unprojected pixel centres at each pixel's depth, so the G-buffer agrees with
+// the matrices exactly; background pixels (ID -1) get normal 0, position 0, depth 0.
+inline Frame makeFrame(const SceneDescription& d) {
+    Frame f;
+    f.beauty = Image(d.width, d.height, 3);
+    f.normal = Image(d.width, d.height, 3);
+    f.position = Image(d.width, d.height, 3);
+    f.depth = Image(d.width, d.height, 1);
+    f.objectId.resize(std::size_t(d.width) * d.height);
+    f.objectToWorld.assign(d.objectCount, Matrix4::identity());
+    f.worldToScreen = pinholeWorldToScreen(d.width, d.height);
+    for (int y = 0; y < d.height; ++y) {
+        for (int x = 0; x < d.width; ++x) {
+            int id = d.id(x, y);
+            f.objectId[std::size_t(y) * d.width + x] = id;
+            auto c = d.colour(x, y);
+            for (int k = 0; k < 3; ++k) f.beauty.at(x, y, k) = c[k];
+            if (id < 0) continue;
+            float z = d.depth(x, y);
+            auto n = d.normal(x, y);
+            f.depth.at(x, y) = z;
+            f.position.at(x, y, 0) = (float(x) + 0.5f - 0.5f * float(d.width)) * z / kFocal;
+            f.position.at(x, y, 1) = (float(y) + 0.5f - 0.5f * float(d.height)) * z / kFocal;
+            f.position.at(x, y, 2) = z;
+            for (int k = 0; k < 3; ++k) f.normal.at(x, y, k) = n[k];
+        }
+    }
+    return f;
+}
+
+// Adds zero-mean uniform noise of half-width `amplitude` to the beauty (deterministic).
+inline void addNoise(Frame& f, float amplitude, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-amplitude, amplitude);
+    for (float& v : f.beauty.pixels) v = std::max(0.0f, v + u(rng));
+}
+
+inline DenoiserSettings cpuSettings(Method method) {
+    DenoiserSettings s;
+    s.method = method;
+    s.device = DeviceType::Cpu;
+    return s;
+}
+
+// A fresh empty folder under the system temp folder, removed with the object.
+class TempFolder {
+public:
+    explicit TempFolder(const std::string& name)
+        : path_(std::filesystem::temp_directory_path() /
+                ("rtdenoise-test-" + name + "-" + std::to_string(::getpid()))) {
+        std::filesystem::remove_all(path_);
+        std::filesystem::create_directories(path_);
+    }
+    ~TempFolder() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
+    const std::filesystem::path& path() const { return path_; }
+
+private:
+    std::filesystem::path path_;
+};
+
+inline std::filesystem::path boxFolder() {
+    return std::filesystem::path(RTD_SHARED_DIR) / "data" / "box";
+}
+
+}  // namespace rtd::test
