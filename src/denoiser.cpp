@@ -88,6 +88,7 @@ struct Denoiser::Impl {
     DeviceBuffer<float> noisy, despeckled, normal, position, depth, filtered, scratch,
         reprojected;
     DeviceBuffer<float> history[2];
+    DeviceBuffer<float> windowSums;  // 7 planes: separable window statistics
     DeviceBuffer<std::int32_t> objectId[2];
     DeviceBuffer<std::uint8_t> nonFinite, validity;
     // Staging for devices that cannot read host memory.
@@ -120,6 +121,7 @@ struct Denoiser::Impl {
 
     std::size_t pixels() const { return std::size_t(width) * height; }
     Planes3 planes(const DeviceBuffer<float>& b) const { return {b.data(), layout.planeSize}; }
+    PlaneSet sums() const { return {windowSums.data(), layout.planeSize}; }
     GBufferView gbuffer() const {
         return {layout, planes(normal), planes(position), depth.data(), objectId[current].data()};
     }
@@ -149,6 +151,8 @@ struct Denoiser::Impl {
             *b = DeviceBuffer<float>(d, 3 * padded);
             d.fill(b->data(), 0, b->bytes());
         }
+        windowSums = DeviceBuffer<float>(d, 7 * padded);
+        d.fill(windowSums.data(), 0, windowSums.bytes());
         depth = DeviceBuffer<float>(d, padded);
         d.fill(depth.data(), 0, depth.bytes());
         for (auto& ids : objectId) {
@@ -224,11 +228,16 @@ struct Denoiser::Impl {
         if (settings.outlier.enabled) {
             int radius = settings.outlier.radius;
             float k = settings.outlier.k;
-            addPass("outlier", {"noisy", "objectId"}, {"despeckled"}, [this, radius, k] {
-                device->launch(
-                    OutlierKernel{gbuffer(), planes(noisy), planes(despeckled), radius, k}, width,
-                    height);
+            addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
+                device->launch(LuminanceRowSumsKernel{gbuffer(), planes(noisy), sums(), radius},
+                               width, height);
             });
+            addPass("outlier", {"noisy", "windowSums", "objectId"}, {"despeckled"},
+                    [this, radius, k] {
+                        device->launch(OutlierKernel{gbuffer(), sums(), planes(noisy),
+                                                     planes(despeckled), radius, k},
+                                       width, height);
+                    });
             in = &despeckled;
             inName = "despeckled";
         }
@@ -244,9 +253,13 @@ struct Denoiser::Impl {
                     {"reprojected", "validity"}, [this] { reproject(); });
             float alpha = settings.temporal.alpha, k = settings.temporal.clampK;
             int radius = settings.temporal.clampRadius;
-            addPass("accumulate", {"filtered", "reprojected", "validity"}, {"output", "history"},
-                    [this, alpha, k, radius] {
-                        device->launch(AccumulateKernel{gbuffer(), planes(*spatialOutput),
+            addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
+                device->launch(ColorRowSumsKernel{gbuffer(), planes(*spatialOutput), sums(), radius},
+                               width, height);
+            });
+            addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity"},
+                    {"output", "history"}, [this, alpha, k, radius] {
+                        device->launch(AccumulateKernel{gbuffer(), sums(), planes(*spatialOutput),
                                                         planes(reprojected), validity.data(),
                                                         planes(history[current]), alpha, k,
                                                         radius},

@@ -220,7 +220,7 @@ TEST(Reprojection, EqualMatricesMapEveryPixelToItself) {
     Frame frame = makeFrame(d);
     Denoiser denoiser(pureHistorySettings());
     Image first = denoiser.processFrame(frame);
-    EXPECT_EQ(maxAbsDifference(first, frame.beauty), 0.0f);
+    EXPECT_LT(maxAbsDifference(first, frame.beauty), 1e-3f);  // colours up to 3200
     Frame second = frame;
     // The current frame must not show (alpha 0); it varies so that the clamp window is wide.
     for (float& v : second.beauty.pixels) v = -v;
@@ -342,10 +342,11 @@ TEST(Denoiser, PassesAreListedWithTheirBuffers) {
     Denoiser temporal(settingsFor(Method::Temporal));
     std::vector<std::string> names;
     for (const PassInfo& p : temporal.passes()) names.push_back(p.name);
-    std::vector<std::string> expected{"ingest", "outlier", "atrous0", "atrous1", "atrous2",
-                                      "atrous3", "atrous4", "reproject", "accumulate"};
+    std::vector<std::string> expected{"ingest",  "outlier-rows", "outlier",    "atrous0",
+                                      "atrous1", "atrous2",      "atrous3",    "atrous4",
+                                      "reproject", "clamp-rows", "accumulate"};
     EXPECT_EQ(names, expected);
-    EXPECT_EQ(temporal.passes()[7].outputs, (std::vector<std::string>{"reprojected", "validity"}));
+    EXPECT_EQ(temporal.passes()[8].outputs, (std::vector<std::string>{"reprojected", "validity"}));
 }
 
 }  // namespace

@@ -182,9 +182,8 @@ Frame Sequence::readFrame(int index) const {
 void writeFrame(const std::filesystem::path& folder, int index, const Frame& frame) {
     std::error_code ec;
     std::filesystem::create_directories(folder, ec);  // a failure shows at the first write
-    const std::string suffix = "_" + std::to_string(index);
     const auto path = [&](const char* stem, const char* extension) {
-        return folder / (stem + suffix + extension);
+        return folder / fmt::format("{}_{}{}", stem, index, extension);
     };
     writeExr(path("beauty", ".exr"), frame.beauty);
     writeExr(path("normal", ".exr"), frame.normal);

@@ -1,22 +1,24 @@
 // Temporal accumulation (assignment formula): C_i = a C_i + (1 - a) Clamp(C_{i-1}), the history
-// clamped per channel to mu +- k sigma of the current filtered frame's neighbourhood (its object
-// pixels: background and the border do not count); a = 1 where the history is invalid.
+// clamped per channel to mu +- k sigma of the current filtered frame's (2r+1)^2 neighbourhood
+// (its object pixels: background and the border do not count); a = 1 where the history is
+// invalid. Runs after ColorRowSumsKernel (the column half of the window).
 #pragma once
 
 #include "kernels/reproject.h"
-#include "kernels/views.h"
+#include "kernels/window_sums.h"
 
 namespace rtd {
 
 struct AccumulateKernel {
     GBufferView g;
+    PlaneSet rowSums;     // from ColorRowSumsKernel over `current`
     Planes3 current;      // this frame, spatially filtered
     Planes3 reprojected;  // history at this pixel
     const std::uint8_t* validity;
     Planes3 out;
     float alpha;
     float clampK;
-    int radius;  // <= layout.padding
+    int radius;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
@@ -26,30 +28,17 @@ struct AccumulateKernel {
             out.store(i, c);
             return;
         }
-        float sumR = 0.0f, sumG = 0.0f, sumB = 0.0f, sum2R = 0.0f, sum2G = 0.0f, sum2B = 0.0f;
-        float count = 0.0f;
-        for (int dy = -radius; dy <= radius; ++dy) {
-            int row = i + L.offset(0, dy);
-            RTD_VECTORIZE
-            for (int dx = -radius; dx <= radius; ++dx) {
-                int j = row + dx;
-                float use = foregroundMask(g.objectId[j]);
-                Float3 v = current.load(j);
-                sumR += use * v.x;
-                sumG += use * v.y;
-                sumB += use * v.z;
-                sum2R += use * v.x * v.x;
-                sum2G += use * v.y * v.y;
-                sum2B += use * v.z * v.z;
-                count += use;
-            }
+        float inv = 1.0f / maxf(columnSum(rowSums, 0, i, L.pitch, radius), 1.0f);
+        float lo[3], hi[3];
+        for (int ch = 0; ch < 3; ++ch) {
+            float mean = columnSum(rowSums, 1 + ch, i, L.pitch, radius) * inv;
+            float meanSquare = columnSum(rowSums, 4 + ch, i, L.pitch, radius) * inv;
+            float sigma = std::sqrt(maxf(meanSquare - mean * mean, 0.0f));
+            lo[ch] = mean - clampK * sigma;
+            hi[ch] = mean + clampK * sigma;
         }
-        float inv = 1.0f / count;  // count >= 1: a valid pixel is an object pixel
-        Float3 mean = make3(sumR, sumG, sumB) * inv;
-        Float3 variance = make3(sum2R, sum2G, sum2B) * inv - mean * mean;
-        Float3 sigma = make3(std::sqrt(maxf(variance.x, 0.0f)), std::sqrt(maxf(variance.y, 0.0f)),
-                             std::sqrt(maxf(variance.z, 0.0f)));
-        Float3 history = clamp3(reprojected.load(i), mean - sigma * clampK, mean + sigma * clampK);
+        Float3 history = clamp3(reprojected.load(i), make3(lo[0], lo[1], lo[2]),
+                                make3(hi[0], hi[1], hi[2]));
         out.store(i, c * alpha + history * (1.0f - alpha));
     }
 };

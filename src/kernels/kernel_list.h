@@ -8,10 +8,13 @@
 #include "kernels/jbf.h"
 #include "kernels/outlier.h"
 #include "kernels/reproject.h"
+#include "kernels/window_sums.h"
 
 #define RTD_FOR_EACH_KERNEL(X) \
     X(IngestKernel)            \
     X(PackKernel)              \
+    X(LuminanceRowSumsKernel)  \
+    X(ColorRowSumsKernel)      \
     X(OutlierKernel)           \
     X(JbfKernel)               \
     X(AtrousKernel)            \

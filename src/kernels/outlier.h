@@ -1,40 +1,30 @@
 // Firefly removal (shared/seeds/002): a pixel's luminance is clamped to mean + k * stddev of the
-// luminance of the object pixels in its window; the colour is scaled, keeping its hue.
-// Background passes through.
+// luminance of the object pixels in its (2r+1)^2 window; the colour is scaled, keeping its hue.
+// Background passes through. Runs after LuminanceRowSumsKernel (the column half of the window).
 #pragma once
 
-#include "kernels/views.h"
+#include "kernels/window_sums.h"
 
 namespace rtd {
 
 struct OutlierKernel {
     GBufferView g;
+    PlaneSet rowSums;  // from LuminanceRowSumsKernel
     Planes3 in, out;
-    int radius;  // <= layout.padding
+    int radius;
     float k;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
         int i = L.index(x, y);
         Float3 c = in.load(i);
-        float sum = 0.0f, sum2 = 0.0f, count = 0.0f;
-        for (int dy = -radius; dy <= radius; ++dy) {
-            int row = i + L.offset(0, dy);
-            RTD_VECTORIZE
-            for (int dx = -radius; dx <= radius; ++dx) {
-                int j = row + dx;
-                float use = foregroundMask(g.objectId[j]);
-                float l = luminance(in.load(j));
-                sum += use * l;
-                sum2 += use * l * l;
-                count += use;
-            }
-        }
-        float mean = sum / maxf(count, 1.0f);
-        float variance = maxf(sum2 / maxf(count, 1.0f) - mean * mean, 0.0f);
+        float count = maxf(columnSum(rowSums, 0, i, L.pitch, radius), 1.0f);
+        float mean = columnSum(rowSums, 1, i, L.pitch, radius) / count;
+        float variance =
+            maxf(columnSum(rowSums, 2, i, L.pitch, radius) / count - mean * mean, 0.0f);
         float limit = mean + k * std::sqrt(variance);
         float l = luminance(c);
-        // Background: count may be 0 and the pixel is not an object: keep it.
+        // Background keeps its value (its window statistics are not its own).
         float scale = g.objectId[i] >= 0 && l > limit && l > 0.0f ? limit / l : 1.0f;
         out.store(i, c * scale);
     }

@@ -1,0 +1,86 @@
+// Google Benchmark: ms per frame of each method on the course scene (box, 512x512) when it is
+// beside the repository (synthetic frames of the same size otherwise), with each pass's mean time
+// as a counter, and the straightforward JBF as the baseline. Disk I/O is outside the timing.
+//   build/release/bench/bench_methods --benchmark_min_time=2
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <vector>
+
+#include "baseline_jbf.h"
+#include "rtdenoise/rtdenoise.h"
+
+namespace {
+
+using namespace rtd;
+
+const std::vector<Frame>& frames() {
+    static const std::vector<Frame> loaded = [] {
+        std::vector<Frame> result;
+        std::filesystem::path box = std::filesystem::path(RTD_SHARED_DIR) / "data" / "box";
+        if (std::filesystem::exists(box / "beauty_0.exr")) {
+            Sequence sequence(box);
+            for (int i = 0; i < std::min(sequence.frameCount(), 6); ++i)
+                result.push_back(sequence.readFrame(i));
+        }
+        return result;
+    }();
+    return loaded;
+}
+
+void runMethod(benchmark::State& state, Method method, SpatialFilter filter) {
+    if (frames().empty()) {
+        state.SkipWithError("course data not found beside the repository");
+        return;
+    }
+    DenoiserSettings settings;
+    settings.method = method;
+    settings.device = DeviceType::Cpu;
+    settings.temporal.spatialFilter = filter;
+    Denoiser denoiser(settings);
+    Image output;
+    std::vector<double> passTotals(denoiser.passes().size(), 0.0);
+    std::size_t i = 0;
+    for (auto _ : state) {
+        denoiser.processFrame(frames()[i++ % frames().size()], output);
+        benchmark::DoNotOptimize(output.pixels.data());
+        const FrameStats& stats = denoiser.lastFrameStats();
+        for (std::size_t p = 0; p < passTotals.size(); ++p)
+            passTotals[p] += stats.passMilliseconds[p];
+    }
+    for (std::size_t p = 0; p < passTotals.size(); ++p)
+        state.counters[denoiser.passes()[p].name + "_ms"] =
+            passTotals[p] / double(state.iterations());
+    state.SetItemsProcessed(state.iterations());
+    state.SetLabel(denoiser.deviceName());
+}
+
+void BM_Jbf(benchmark::State& s) { runMethod(s, Method::Jbf, SpatialFilter::Jbf); }
+void BM_Atrous(benchmark::State& s) { runMethod(s, Method::Atrous, SpatialFilter::Atrous); }
+void BM_TemporalAtrous(benchmark::State& s) {
+    runMethod(s, Method::Temporal, SpatialFilter::Atrous);
+}
+void BM_TemporalJbf(benchmark::State& s) { runMethod(s, Method::Temporal, SpatialFilter::Jbf); }
+
+void BM_BaselineJbf(benchmark::State& state) {
+    if (frames().empty()) {
+        state.SkipWithError("course data not found beside the repository");
+        return;
+    }
+    DenoiserSettings settings;
+    Image output;
+    for (auto _ : state) {
+        bench::baselineJbf(frames()[0], settings, output);
+        benchmark::DoNotOptimize(output.pixels.data());
+    }
+}
+
+BENCHMARK(BM_BaselineJbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+BENCHMARK(BM_Jbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+BENCHMARK(BM_Atrous)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TemporalAtrous)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TemporalJbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,76 @@
+// Separable window statistics: a row pass sums, over the 2r+1 pixels of each pixel's row window,
+// the count of object pixels and their first and second moments; a column pass (the consumer:
+// firefly removal, history clamp) sums those over 2r+1 rows. O(r) per pixel instead of O(r^2).
+// Background and border pixels do not count. The border rows of the sums stay 0.
+#pragma once
+
+#include "kernels/views.h"
+
+namespace rtd {
+
+// Consecutive planes of one buffer.
+struct PlaneSet {
+    float* data = nullptr;
+    int planeSize = 0;
+    RTD_HOST_DEVICE RTD_INLINE float& at(int plane, int i) const {
+        return data[plane * planeSize + i];
+    }
+};
+
+// Planes: 0 count, 1 sum of luminance, 2 sum of luminance^2.
+struct LuminanceRowSumsKernel {
+    GBufferView g;
+    Planes3 color;
+    PlaneSet sums;
+    int radius;  // <= layout.padding
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        int i = g.layout.index(x, y);
+        float count = 0.0f, sum = 0.0f, sum2 = 0.0f;
+        for (int dx = -radius; dx <= radius; ++dx) {
+            float use = foregroundMask(g.objectId[i + dx]);
+            float l = luminance(color.load(i + dx));
+            count += use;
+            sum += use * l;
+            sum2 += use * l * l;
+        }
+        sums.at(0, i) = count;
+        sums.at(1, i) = sum;
+        sums.at(2, i) = sum2;
+    }
+};
+
+// Planes: 0 count, 1-3 sum of R, G, B, 4-6 sum of R^2, G^2, B^2.
+struct ColorRowSumsKernel {
+    GBufferView g;
+    Planes3 color;
+    PlaneSet sums;
+    int radius;  // <= layout.padding
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        int i = g.layout.index(x, y);
+        float s[7] = {0, 0, 0, 0, 0, 0, 0};
+        for (int dx = -radius; dx <= radius; ++dx) {
+            float use = foregroundMask(g.objectId[i + dx]);
+            Float3 c = color.load(i + dx) * use;
+            s[0] += use;
+            s[1] += c.x;
+            s[2] += c.y;
+            s[3] += c.z;
+            s[4] += c.x * c.x;
+            s[5] += c.y * c.y;
+            s[6] += c.z * c.z;
+        }
+        for (int k = 0; k < 7; ++k) sums.at(k, i) = s[k];
+    }
+};
+
+// Column pass helper: sums plane `plane` over rows y-r..y+r at pixel index i.
+RTD_HOST_DEVICE RTD_INLINE float columnSum(const PlaneSet& sums, int plane, int i, int pitch,
+                                           int radius) {
+    float total = 0.0f;
+    for (int dy = -radius; dy <= radius; ++dy) total += sums.at(plane, i + dy * pitch);
+    return total;
+}
+
+}  // namespace rtd
