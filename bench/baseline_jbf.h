@@ -1,6 +1,6 @@
 // The straightforward joint bilateral filter a user would write first (the course's code shape):
-// interleaved RGB, std::exp and std::acos per tap, bounds tests in the inner loop, rows spread over
-// the cores. The baseline the benchmarks quote their speed-ups against.
+// interleaved RGB, std::exp and std::acos per tap, bounds tests in the inner loop; rows spread
+// over `threads` cores. The baseline the benchmarks quote their speed-ups against.
 #pragma once
 
 #include <algorithm>
@@ -11,11 +11,11 @@
 
 namespace rtd::bench {
 
-inline void baselineJbf(const Frame& f, const DenoiserSettings& s, Image& out) {
+inline void baselineJbf(const Frame& f, const DenoiserSettings& s, Image& out, int threads) {
     const int w = f.width(), h = f.height(), r = s.jbf.radius;
     out = Image(w, h, 3);
     auto sq = [](float v) { return v * v; };
-#pragma omp parallel for schedule(dynamic, 4)
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             const int idI = f.objectId[std::size_t(y) * w + x];

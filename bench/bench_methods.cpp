@@ -62,6 +62,7 @@ void BM_TemporalAtrous(benchmark::State& s) {
 }
 void BM_TemporalJbf(benchmark::State& s) { runMethod(s, Method::Temporal, SpatialFilter::Jbf); }
 
+// state.range(0): threads (1: the course code as written, 2: both cores of this machine).
 void BM_BaselineJbf(benchmark::State& state) {
     if (frames().empty()) {
         state.SkipWithError("course data not found beside the repository");
@@ -70,12 +71,18 @@ void BM_BaselineJbf(benchmark::State& state) {
     DenoiserSettings settings;
     Image output;
     for (auto _ : state) {
-        bench::baselineJbf(frames()[0], settings, output);
+        bench::baselineJbf(frames()[0], settings, output, int(state.range(0)));
         benchmark::DoNotOptimize(output.pixels.data());
     }
 }
 
-BENCHMARK(BM_BaselineJbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+BENCHMARK(BM_BaselineJbf)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(3.0);
 BENCHMARK(BM_Jbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 BENCHMARK(BM_Atrous)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_TemporalAtrous)->Unit(benchmark::kMillisecond)->UseRealTime();

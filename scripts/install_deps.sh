@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Installs what rtdenoise needs to build, test and make videos, from Debian's packages.
+set -euo pipefail
+packages=(cmake ninja-build clang libomp-dev g++ libopenexr-dev libpng-dev libfmt-dev
+          libcli11-dev libgtest-dev libbenchmark-dev ffmpeg)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  SUDO=""
+  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}"
+fi
