@@ -12,7 +12,9 @@ int main(int argc, char** argv) {
     CLI::App app{"rtdenoise: real-time denoising of path-traced frame sequences"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "rtdenoise 0.1.0");
-    std::vector<rtd::cli::Command> commands{rtd::cli::addDenoiseCommand(app)};
+    std::vector<rtd::cli::Command> commands{rtd::cli::addDenoiseCommand(app),
+                                            rtd::cli::addRenderCommand(app),
+                                            rtd::cli::addCompareCommand(app)};
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

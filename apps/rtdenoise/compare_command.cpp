@@ -1,0 +1,11 @@
+// `rtdenoise compare`: placeholder until issue 3's implementation lands.
+#include "commands.h"
+
+namespace rtd::cli {
+
+Command addCompareCommand(CLI::App& app) {
+    CLI::App* c = app.add_subcommand("compare", "(not implemented yet)");
+    return {c, [] { return 1; }};
+}
+
+}  // namespace rtd::cli
