@@ -78,8 +78,7 @@ struct Denoiser::Impl {
     std::vector<PassInfo> passInfos;
     FrameStats stats;
 
-    int width = 0, height = 0;
-    Layout layout;    // padded planar layout of every device image
+    Layout layout;    // padded planar layout of every device image (and the frame size)
     int padding = 0;  // widest filter reach of this pipeline, in pixels
     int current = 0;  // which of the ping-pong buffers holds this frame's ID and output
     bool hasHistory = false;
@@ -109,8 +108,7 @@ struct Denoiser::Impl {
     const float* inDepth = nullptr;
     const std::int32_t* inId = nullptr;
 
-    // Where each stage's result lies (fixed when the pipeline is built).
-    DeviceBuffer<float>* spatialInput = nullptr;
+    // Where the spatial filter's result lies (fixed when the pipeline is built).
     DeviceBuffer<float>* spatialOutput = nullptr;
 
     explicit Impl(const DenoiserSettings& s) : settings(s) {
@@ -119,7 +117,9 @@ struct Denoiser::Impl {
         buildPipeline();
     }
 
-    std::size_t pixels() const { return std::size_t(width) * height; }
+    std::size_t pixels() const { return std::size_t(layout.width) * layout.height; }
+    int width() const { return layout.width; }
+    int height() const { return layout.height; }
     Planes3 planes(const DeviceBuffer<float>& b) const { return {b.data(), layout.planeSize}; }
     PlaneSet sums() const { return {windowSums.data(), layout.planeSize}; }
     GBufferView gbuffer() const {
@@ -141,8 +141,6 @@ struct Denoiser::Impl {
             throw Error(ErrorCode::InvalidInput,
                         fmt::format("frame: {}x{} is too large for one device image", w, h));
         layout.planeSize = int(planeSize);
-        width = w;
-        height = h;
         std::size_t n = pixels(), padded = std::size_t(planeSize);
         Device& d = *device;
         // Zero everywhere, ID -1 everywhere: the border reads as background forever after.
@@ -190,7 +188,7 @@ struct Denoiser::Impl {
                     [this, in, coordScale, radius, edges] {
                         device->launch(JbfKernel{gbuffer(), planes(*in), planes(filtered), radius,
                                                  coordScale, edges},
-                                       width, height);
+                                       width(), height());
                     });
             return &filtered;
         }
@@ -210,7 +208,7 @@ struct Denoiser::Impl {
                     [this, src, dst, stride, edges] {
                         device->launch(
                             AtrousKernel{gbuffer(), planes(*src), planes(*dst), stride, edges},
-                            width, height);
+                            width(), height());
                     });
             src = dst;
             srcName = dstName;
@@ -230,18 +228,17 @@ struct Denoiser::Impl {
             float k = settings.outlier.k;
             addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
                 device->launch(LuminanceRowSumsKernel{gbuffer(), planes(noisy), sums(), radius},
-                               width, height);
+                               width(), height());
             });
             addPass("outlier", {"noisy", "windowSums", "objectId"}, {"despeckled"},
                     [this, radius, k] {
                         device->launch(OutlierKernel{gbuffer(), sums(), planes(noisy),
                                                      planes(despeckled), radius, k},
-                                       width, height);
+                                       width(), height());
                     });
             in = &despeckled;
             inName = "despeckled";
         }
-        spatialInput = in;
         SpatialFilter filter = settings.method == Method::Jbf      ? SpatialFilter::Jbf
                                : settings.method == Method::Atrous ? SpatialFilter::Atrous
                                                                    : settings.temporal.spatialFilter;
@@ -255,7 +252,7 @@ struct Denoiser::Impl {
             int radius = settings.temporal.clampRadius;
             addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
                 device->launch(ColorRowSumsKernel{gbuffer(), planes(*spatialOutput), sums(), radius},
-                               width, height);
+                               width(), height());
             });
             addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity"},
                     {"output", "history"}, [this, alpha, k, radius] {
@@ -263,7 +260,7 @@ struct Denoiser::Impl {
                                                         planes(reprojected), validity.data(),
                                                         planes(history[current]), alpha, k,
                                                         radius},
-                                       width, height);
+                                       width(), height());
                     });
         }
         for (const Pass& p : pipeline) passInfos.push_back(p.info);
@@ -274,7 +271,7 @@ struct Denoiser::Impl {
         device->launch(IngestKernel{layout, inBeauty, inNormal, inPosition, inDepth, inId,
                                     planes(noisy), planes(normal), planes(position),
                                     depth.data(), objectId[current].data(), nonFinite.data()},
-                       width, height);
+                       width(), height());
     }
 
     void reproject() {
@@ -304,12 +301,12 @@ struct Denoiser::Impl {
         device->launch(ReprojectKernel{gbuffer(), objectId[previous].data(), objects.data(),
                                        planes(history[previous]), planes(reprojected),
                                        validity.data(), hasHistory ? 1 : 0},
-                       width, height);
+                       width(), height());
     }
 
     void process(const Frame& f, Image& output) {
         checkFrame(f);
-        if (f.width() != width || f.height() != height) allocate(f.width(), f.height());
+        if (f.width() != width() || f.height() != height()) allocate(f.width(), f.height());
         frame = &f;
 
         auto start = Clock::now();
@@ -345,12 +342,12 @@ struct Denoiser::Impl {
         stats.nonFiniteReplaced = device->sumBytes(nonFinite.data(), n);
 
         start = Clock::now();
-        if (output.width != width || output.height != height || output.channels != 3)
-            output = Image(width, height, 3);
+        if (output.width != width() || output.height != height() || output.channels != 3)
+            output = Image(width(), height(), 3);
         DeviceBuffer<float>& result =
             settings.method == Method::Temporal ? history[current] : *spatialOutput;
         float* packTarget = device->sharesHostMemory() ? output.pixels.data() : stageOutput.data();
-        device->launch(PackKernel{layout, planes(result), packTarget}, width, height);
+        device->launch(PackKernel{layout, planes(result), packTarget}, width(), height());
         if (!device->sharesHostMemory())
             device->copyToHost(output.pixels.data(), stageOutput.data(), 3 * n * sizeof(float));
         device->synchronize();
@@ -365,13 +362,13 @@ struct Denoiser::Impl {
     }
 
     Image reprojectionDebugImage() const {
-        Image image(width, height, 3);
-        if (settings.method != Method::Temporal || width == 0) return image;
+        Image image(width(), height(), 3);
+        if (settings.method != Method::Temporal || width() == 0) return image;
         std::vector<std::uint8_t> padded(validity.size()), codes(pixels());
         device->copyToHost(padded.data(), validity.data(), padded.size());
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x)
-                codes[std::size_t(y) * width + x] = padded[layout.index(x, y)];
+        for (int y = 0; y < height(); ++y)
+            for (int x = 0; x < width(); ++x)
+                codes[std::size_t(y) * width() + x] = padded[layout.index(x, y)];
         static const float colours[5][3] = {
             {0.0f, 1.0f, 0.0f},  // valid: green
             {1.0f, 0.0f, 0.0f},  // outside the screen: red

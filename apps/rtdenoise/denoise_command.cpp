@@ -93,7 +93,29 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         return std::async(std::launch::async, [&sequence, i] { return sequence.readFrame(i); });
     };
     std::future<Frame> next = readAsync(0);
-    Image result;
+    // Frame i's files are written on another thread while frame i+1 is denoised; two result
+    // images alternate so the one being written is never the one being filled.
+    Image results[2];
+    std::future<double> writing;  // milliseconds the last write took
+    auto writeAsync = [&](int i, const Image& result, Image debug) {
+        return std::async(std::launch::async, [&, i, debug = std::move(debug)] {
+            auto writeStart = Clock::now();
+            writeExr(options.output / fmt::format("result_{}.exr", i), result);
+            if (options.png || !options.video.empty()) {
+                Image display = toneMap(result, options.exposure);
+                if (options.png)
+                    writePng(options.output / fmt::format("result_{}.png", i), display);
+                if (!options.video.empty()) {
+                    if (!video)
+                        video.emplace(options.video, display.width, display.height, options.fps);
+                    video->addFrame(display);
+                }
+            }
+            if (!debug.empty())
+                writePng(options.output / fmt::format("reprojection_{}.png", i), debug);
+            return std::chrono::duration<double, std::milli>(Clock::now() - writeStart).count();
+        });
+    };
     for (int i = 0; i < frames; ++i) {
         auto waitStart = Clock::now();
         Frame frame = next.get();
@@ -101,6 +123,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
             std::chrono::duration<double, std::milli>(Clock::now() - waitStart).count());
         if (i + 1 < frames) next = readAsync(i + 1);
 
+        Image& result = results[i % 2];
         auto frameStart = Clock::now();
         denoiser.processFrame(frame, result);
         frameTimes.push_back(
@@ -110,23 +133,15 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
             passTimes[p].push_back(stats.passMilliseconds[p]);
         nonFinite += stats.nonFiniteReplaced;
 
-        auto writeStart = Clock::now();
-        writeExr(options.output / fmt::format("result_{}.exr", i), result);
-        if (options.png || !options.video.empty()) {
-            Image display = toneMap(result, options.exposure);
-            if (options.png) writePng(options.output / fmt::format("result_{}.png", i), display);
-            if (!options.video.empty()) {
-                if (!video) video.emplace(options.video, display.width, display.height, options.fps);
-                video->addFrame(display);
-            }
-        }
+        Image debug;
         if (options.debug && settings.method == Method::Temporal)
-            writePng(options.output / fmt::format("reprojection_{}.png", i),
-                     denoiser.reprojectionDebugImage());
-        writeTimes.push_back(
-            std::chrono::duration<double, std::milli>(Clock::now() - writeStart).count());
+            debug = denoiser.reprojectionDebugImage();
+        if (writing.valid()) writeTimes.push_back(writing.get());  // in order, one at a time
+        writing = writeAsync(i, result, std::move(debug));
         progress.update(i + 1);
     }
+    if (writing.valid()) writeTimes.push_back(writing.get());
+    const Image& result = results[0];
     if (video) video->finish();
     progress.finish();
     double total = std::chrono::duration<double>(Clock::now() - start).count();
@@ -144,7 +159,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
                        median(passTimes[p]));
         fmt::print("read wait median {:8.2f} ms/frame (reading overlaps denoising)\n",
                    median(readWaitTimes));
-        fmt::print("write     median {:8.2f} ms/frame\n", median(writeTimes));
+        fmt::print("write     median {:8.2f} ms/frame (overlaps the next frame's denoising)\n",
+                   median(writeTimes));
         fmt::print("output: {}\n", options.output.string());
         if (!options.video.empty()) fmt::print("video: {}\n", options.video.string());
     }
