@@ -71,6 +71,14 @@ struct Pass {
     std::function<void()> run;
 };
 
+// A frame input: the caller's host buffer, and where the device reads it from.
+struct InputBuffer {
+    const void* host = nullptr;
+    std::size_t bytes = 0;
+    DeviceBuffer<float> staging;  // only for devices that cannot read host memory
+    const float* device = nullptr;
+};
+
 struct Denoiser::Impl {
     DenoiserSettings settings;
     std::unique_ptr<Device> device;
@@ -80,33 +88,32 @@ struct Denoiser::Impl {
 
     Layout layout;    // padded planar layout of every device image (and the frame size)
     int padding = 0;  // widest filter reach of this pipeline, in pixels
-    int current = 0;  // which of the ping-pong buffers holds this frame's ID and output
+    int current = 0;  // which of the ping-pong buffers hold this frame (the other: the last)
     bool hasHistory = false;
+    bool temporal = false;  // the method keeps history
+    bool frameHasAlbedo = false;
 
     // Planar device buffers (3 planes for colours and vectors).
-    DeviceBuffer<float> noisy, despeckled, normal, position, depth, filtered, scratch,
-        reprojected;
-    DeviceBuffer<float> history[2];
-    DeviceBuffer<float> windowSums;  // 7 planes: separable window statistics
+    DeviceBuffer<float> noisy, despeckled, position, albedo, filtered, scratch, reprojected;
+    DeviceBuffer<float> normal[2], depth[2], history[2];
     DeviceBuffer<std::int32_t> objectId[2];
+    DeviceBuffer<float> derivatives;  // 3 planes: dz/dx, dz/dy, fwidth(n)
+    DeviceBuffer<float> windowSums;   // 7 planes: separable window statistics
     DeviceBuffer<std::uint8_t> nonFinite, validity;
-    // Staging for devices that cannot read host memory.
-    DeviceBuffer<float> stageBeauty, stageNormal, stagePosition, stageDepth, stageOutput;
-    DeviceBuffer<std::int32_t> stageId;
+    // svgf only
+    DeviceBuffer<float> illumination, varianceOut, filterA, filterB;  // 3, 4, 4, 4 planes
+    DeviceBuffer<float> moments[2], historyLength[2], feedback[2];  // 2, 1, 4 planes
+    DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
 
-    // What the previous frame's matrices were (for back-projection).
+    // The previous frame's matrices (for back-projection).
     std::vector<Matrix4> previousObjectToWorld;
     Matrix4 previousWorldToScreen;
 
-    // Set per frame before the passes run.
+    // Per frame: the caller's buffers as the device sees them.
     const Frame* frame = nullptr;
-    const float* inBeauty = nullptr;
-    const float* inNormal = nullptr;
-    const float* inPosition = nullptr;
-    const float* inDepth = nullptr;
-    const std::int32_t* inId = nullptr;
+    InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo;
 
     // Where the spatial filter's result lies (fixed when the pipeline is built).
     DeviceBuffer<float>* spatialOutput = nullptr;
@@ -114,16 +121,39 @@ struct Denoiser::Impl {
     explicit Impl(const DenoiserSettings& s) : settings(s) {
         validate(settings);
         device = createDevice(settings.device);
+        temporal = settings.method == Method::Temporal || settings.method == Method::Svgf;
         buildPipeline();
     }
 
     std::size_t pixels() const { return std::size_t(layout.width) * layout.height; }
     int width() const { return layout.width; }
     int height() const { return layout.height; }
+    int previous() const { return 1 - current; }
     Planes3 planes(const DeviceBuffer<float>& b) const { return {b.data(), layout.planeSize}; }
-    PlaneSet sums() const { return {windowSums.data(), layout.planeSize}; }
+    PlaneSet planeSet(const DeviceBuffer<float>& b) const { return {b.data(), layout.planeSize}; }
+    PlaneSet sums() const { return planeSet(windowSums); }
     GBufferView gbuffer() const {
-        return {layout, planes(normal), planes(position), depth.data(), objectId[current].data()};
+        return {layout, planes(normal[current]), planes(position), depth[current].data(),
+                objectId[current].data()};
+    }
+    PreviousGeometry previousGeometry() const {
+        return {objectId[previous()].data(), depth[previous()].data(),
+                planes(normal[previous()])};
+    }
+    HistoryTest historyTest() const {
+        return {settings.history.geometryTests ? 1 : 0, settings.history.depthTolerance,
+                settings.history.normalTolerance};
+    }
+    template <class Kernel>
+    void launch(const Kernel& kernel) {
+        device->launch(kernel, width(), height());
+    }
+
+    // A zero-filled padded buffer of `planes` planes (the border stays 0 forever after).
+    DeviceBuffer<float> planesBuffer(int count) {
+        DeviceBuffer<float> b(*device, std::size_t(count) * std::size_t(layout.planeSize));
+        device->fill(b.data(), 0, b.bytes());
+        return b;
     }
 
     void allocate(int w, int h) {
@@ -137,35 +167,42 @@ struct Denoiser::Impl {
         layout.pitch = (w + 2 * border + kAlign - 1) / kAlign * kAlign;
         layout.origin = border * layout.pitch + border;
         long long planeSize = (long long)layout.pitch * (h + 2 * border);
-        if (3 * planeSize > 0x7fffffffLL)
+        if (7 * planeSize > 0x7fffffffLL)
             throw Error(ErrorCode::InvalidInput,
                         fmt::format("frame: {}x{} is too large for one device image", w, h));
         layout.planeSize = int(planeSize);
         std::size_t n = pixels(), padded = std::size_t(planeSize);
         Device& d = *device;
-        // Zero everywhere, ID -1 everywhere: the border reads as background forever after.
-        for (auto* b : {&noisy, &despeckled, &normal, &position, &filtered, &scratch, &reprojected,
-                        &history[0], &history[1]}) {
-            *b = DeviceBuffer<float>(d, 3 * padded);
-            d.fill(b->data(), 0, b->bytes());
-        }
-        windowSums = DeviceBuffer<float>(d, 7 * padded);
-        d.fill(windowSums.data(), 0, windowSums.bytes());
-        depth = DeviceBuffer<float>(d, padded);
-        d.fill(depth.data(), 0, depth.bytes());
-        for (auto& ids : objectId) {
+        for (auto* b : {&noisy, &despeckled, &position, &albedo, &filtered, &scratch, &reprojected,
+                        &normal[0], &normal[1], &history[0], &history[1]})
+            *b = planesBuffer(3);
+        depth[0] = planesBuffer(1);
+        depth[1] = planesBuffer(1);
+        derivatives = planesBuffer(3);
+        windowSums = planesBuffer(7);
+        for (auto& ids : objectId) {  // ID -1 everywhere: the border reads as background
             ids = DeviceBuffer<std::int32_t>(d, padded);
             d.fill(ids.data(), 0xff, ids.bytes());
         }
         nonFinite = DeviceBuffer<std::uint8_t>(d, n);
         validity = DeviceBuffer<std::uint8_t>(d, padded);
-        d.fill(validity.data(), kReprojectionBackground, validity.bytes());
+        d.fill(validity.data(), kReprojectionNoHistory, validity.bytes());
+        if (settings.method == Method::Svgf) {
+            illumination = planesBuffer(3);
+            varianceOut = planesBuffer(4);
+            filterA = planesBuffer(4);
+            filterB = planesBuffer(4);
+            for (int k = 0; k < 2; ++k) {
+                moments[k] = planesBuffer(2);
+                historyLength[k] = planesBuffer(1);
+                feedback[k] = planesBuffer(4);
+            }
+        }
         if (!d.sharesHostMemory()) {
-            stageBeauty = DeviceBuffer<float>(d, 3 * n);
-            stageNormal = DeviceBuffer<float>(d, 3 * n);
-            stagePosition = DeviceBuffer<float>(d, 3 * n);
-            stageDepth = DeviceBuffer<float>(d, n);
-            stageId = DeviceBuffer<std::int32_t>(d, n);
+            for (auto* in : {&inBeauty, &inNormal, &inPosition, &inAlbedo})
+                in->staging = DeviceBuffer<float>(d, 3 * n);
+            inDepth.staging = DeviceBuffer<float>(d, n);
+            inId.staging = DeviceBuffer<float>(d, n);  // int32 bits, same size
             stageOutput = DeviceBuffer<float>(d, 3 * n);
         }
         hasHistory = false;
@@ -186,9 +223,8 @@ struct Denoiser::Impl {
             int radius = settings.jbf.radius;
             addPass("jbf", {inName, "normal", "position", "objectId"}, {"filtered"},
                     [this, in, coordScale, radius, edges] {
-                        device->launch(JbfKernel{gbuffer(), planes(*in), planes(filtered), radius,
-                                                 coordScale, edges},
-                                       width(), height());
+                        launch(JbfKernel{gbuffer(), planes(*in), planes(filtered), radius,
+                                         coordScale, edges});
                     });
             return &filtered;
         }
@@ -203,12 +239,9 @@ struct Denoiser::Impl {
             DeviceBuffer<float>* dst = toFiltered ? &filtered : &scratch;
             std::string dstName = last ? "filtered" : fmt::format("atrous{}", level);
             int stride = 1 << level;
-            addPass(fmt::format("atrous{}", level),
-                    {srcName, "normal", "position", "objectId"}, {dstName},
-                    [this, src, dst, stride, edges] {
-                        device->launch(
-                            AtrousKernel{gbuffer(), planes(*src), planes(*dst), stride, edges},
-                            width(), height());
+            addPass(fmt::format("atrous{}", level), {srcName, "normal", "position", "objectId"},
+                    {dstName}, [this, src, dst, stride, edges] {
+                        launch(AtrousKernel{gbuffer(), planes(*src), planes(*dst), stride, edges});
                     });
             src = dst;
             srcName = dstName;
@@ -216,10 +249,118 @@ struct Denoiser::Impl {
         return &filtered;
     }
 
+    void addGeometryPass() {
+        padding = std::max(padding, 1);
+        addPass("geometry", {"depth", "normal", "objectId"}, {"derivatives"}, [this] {
+            launch(GeometryDerivativesKernel{gbuffer(), planeSet(derivatives)});
+        });
+    }
+
+    // The assignment's pipeline after the spatial filter.
+    void addTemporalPasses() {
+        addGeometryPass();
+        addPass("reproject",
+                {"position", "normal", "depth", "objectId", "derivatives", "previous geometry",
+                 "history", "matrices"},
+                {"reprojected", "validity"}, [this] {
+                    launch(ReprojectKernel{gbuffer(), previousGeometry(), objects.data(),
+                                           planeSet(derivatives), historyTest(),
+                                           planes(history[previous()]), planes(reprojected),
+                                           validity.data(), hasHistory ? 1 : 0});
+                });
+        float alpha = settings.temporal.alpha, k = settings.temporal.clampK;
+        int radius = settings.temporal.clampRadius;
+        addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
+            launch(ColorRowSumsKernel{gbuffer(), planes(*spatialOutput), sums(), radius});
+        });
+        addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity"},
+                {"output", "history"}, [this, alpha, k, radius] {
+                    launch(AccumulateKernel{gbuffer(), sums(), planes(*spatialOutput),
+                                            planes(reprojected), validity.data(),
+                                            planes(history[current]), alpha, k, radius});
+                });
+    }
+
+    void addSvgfPasses(DeviceBuffer<float>* in, const std::string& inName) {
+        const SvgfSettings& sv = settings.svgf;
+        SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance,
+                        settings.edges.separateObjects ? 1 : 0};
+        constexpr int kVarianceRadius = 3;  // 7x7 spatial estimate
+        padding = std::max({padding, kVarianceRadius, 2 << (sv.iterations - 1)});
+        addGeometryPass();
+        addPass("svgf-temporal",
+                {inName, "albedo", "position", "normal", "depth", "objectId", "derivatives",
+                 "previous geometry", "feedback", "moments", "historyLength", "matrices"},
+                {"illumination", "moments", "historyLength", "validity"}, [this, in, sv] {
+                    launch(SvgfTemporalKernel{
+                        gbuffer(), previousGeometry(), objects.data(), planeSet(derivatives),
+                        historyTest(), planes(*in), planes(albedo), sv.albedoEpsilon,
+                        planeSet(feedback[previous()]), planeSet(moments[previous()]),
+                        historyLength[previous()].data(), planes(illumination),
+                        planeSet(moments[current]), historyLength[current].data(),
+                        validity.data(), sv.alpha, sv.momentsAlpha, float(sv.maxHistory),
+                        hasHistory ? 1 : 0});
+                });
+        addPass("svgf-variance", {"illumination", "moments", "historyLength", "derivatives"},
+                {"illumination+variance"}, [this, terms] {
+                    // The moments pass uses Falcor's wider luminance tolerance: no variance yet.
+                    SvgfTerms wide = terms;
+                    wide.sigmaLuminance = 10.0f;
+                    launch(SvgfVarianceKernel{gbuffer(), planeSet(derivatives),
+                                              planes(illumination), planeSet(moments[current]),
+                                              historyLength[current].data(),
+                                              planeSet(varianceOut), wide, 4.0f,
+                                              kVarianceRadius});
+                });
+        // Iterations read the variance pass's output (kept for the debug view), then ping-pong
+        // between filterA and filterB; the feedback iteration writes the next frame's colour
+        // history (feedback[current]) directly, and the next iteration reads it from there.
+        Slot src = Slot::Variance;
+        for (int it = 0; it < sv.iterations; ++it) {
+            bool isFeedback = it == sv.feedbackIteration;
+            Slot dst = isFeedback ? Slot::Feedback : (src == Slot::A ? Slot::B : Slot::A);
+            int stride = 1 << it;
+            addPass(fmt::format("svgf-atrous{}", it),
+                    {slotName(src), "normal", "depth", "derivatives"}, {slotName(dst)},
+                    [this, terms, stride, src, dst] {
+                        launch(SvgfAtrousKernel{gbuffer(), planeSet(derivatives),
+                                                planeSet(slot(src)), planeSet(slot(dst)), stride,
+                                                terms});
+                    });
+            src = dst;
+        }
+        addPass("svgf-modulate", {slotName(src), "albedo"}, {"output"}, [this, sv, src] {
+            launch(SvgfModulateKernel{gbuffer(), planes(slot(src)), planes(albedo), planes(noisy),
+                                      planes(filtered), sv.albedoEpsilon});
+        });
+    }
+
+    // Where an svgf stage keeps illumination + variance (4 planes).
+    enum class Slot { Variance, A, B, Feedback };
+    DeviceBuffer<float>& slot(Slot s) {
+        switch (s) {
+            case Slot::Variance: return varianceOut;
+            case Slot::A: return filterA;
+            case Slot::B: return filterB;
+            case Slot::Feedback: return feedback[current];
+        }
+        return filterA;
+    }
+    static std::string slotName(Slot s) {
+        switch (s) {
+            case Slot::Variance: return "illumination+variance";
+            case Slot::A: return "filterA";
+            case Slot::B: return "filterB";
+            case Slot::Feedback: return "feedback";
+        }
+        return "?";
+    }
+
     void buildPipeline() {
         padding = std::max(settings.outlier.enabled ? settings.outlier.radius : 0,
                            settings.method == Method::Temporal ? settings.temporal.clampRadius : 0);
-        addPass("ingest", {"frame"}, {"noisy", "normal", "position", "depth", "objectId"},
+        addPass("ingest", {"frame"},
+                {"noisy", "albedo", "normal", "position", "depth", "objectId"},
                 [this] { ingest(); });
         DeviceBuffer<float>* in = &noisy;
         std::string inName = "noisy";
@@ -227,81 +368,92 @@ struct Denoiser::Impl {
             int radius = settings.outlier.radius;
             float k = settings.outlier.k;
             addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
-                device->launch(LuminanceRowSumsKernel{gbuffer(), planes(noisy), sums(), radius},
-                               width(), height());
+                launch(LuminanceRowSumsKernel{gbuffer(), planes(noisy), sums(), radius});
             });
             addPass("outlier", {"noisy", "windowSums", "objectId"}, {"despeckled"},
                     [this, radius, k] {
-                        device->launch(OutlierKernel{gbuffer(), sums(), planes(noisy),
-                                                     planes(despeckled), radius, k},
-                                       width(), height());
+                        launch(OutlierKernel{gbuffer(), sums(), planes(noisy), planes(despeckled),
+                                             radius, k});
                     });
             in = &despeckled;
             inName = "despeckled";
         }
-        SpatialFilter filter = settings.method == Method::Jbf      ? SpatialFilter::Jbf
-                               : settings.method == Method::Atrous ? SpatialFilter::Atrous
-                                                                   : settings.temporal.spatialFilter;
-        spatialOutput = addSpatialPasses(filter, in, inName);
-
-        if (settings.method == Method::Temporal) {
-            addPass("reproject",
-                    {"position", "objectId", "previousObjectId", "history", "matrices"},
-                    {"reprojected", "validity"}, [this] { reproject(); });
-            float alpha = settings.temporal.alpha, k = settings.temporal.clampK;
-            int radius = settings.temporal.clampRadius;
-            addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
-                device->launch(ColorRowSumsKernel{gbuffer(), planes(*spatialOutput), sums(), radius},
-                               width(), height());
-            });
-            addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity"},
-                    {"output", "history"}, [this, alpha, k, radius] {
-                        device->launch(AccumulateKernel{gbuffer(), sums(), planes(*spatialOutput),
-                                                        planes(reprojected), validity.data(),
-                                                        planes(history[current]), alpha, k,
-                                                        radius},
-                                       width(), height());
-                    });
+        switch (settings.method) {
+            case Method::Jbf: spatialOutput = addSpatialPasses(SpatialFilter::Jbf, in, inName); break;
+            case Method::Atrous:
+                spatialOutput = addSpatialPasses(SpatialFilter::Atrous, in, inName);
+                break;
+            case Method::Temporal:
+                spatialOutput = addSpatialPasses(settings.temporal.spatialFilter, in, inName);
+                addTemporalPasses();
+                break;
+            case Method::Svgf:
+                addSvgfPasses(in, inName);
+                spatialOutput = &filtered;
+                break;
         }
         for (const Pass& p : pipeline) passInfos.push_back(p.info);
         stats.passMilliseconds.assign(pipeline.size(), 0.0);
     }
 
     void ingest() {
-        device->launch(IngestKernel{layout, inBeauty, inNormal, inPosition, inDepth, inId,
-                                    planes(noisy), planes(normal), planes(position),
-                                    depth.data(), objectId[current].data(), nonFinite.data()},
-                       width(), height());
+        launch(IngestKernel{layout, inBeauty.device, inNormal.device, inPosition.device,
+                            inDepth.device, reinterpret_cast<const std::int32_t*>(inId.device),
+                            frameHasAlbedo ? inAlbedo.device : nullptr, planes(noisy),
+                            planes(albedo), planes(normal[current]), planes(position),
+                            depth[current].data(), objectId[current].data(), nonFinite.data()});
     }
 
-    void reproject() {
-        // One matrix per object: current world -> object -> previous world -> previous screen.
-        const Frame& f = *frame;
+    // One matrix per object: current world -> object -> previous world (-> previous screen).
+    void uploadObjectMatrices(const Frame& f) {
         std::size_t count = f.objectToWorld.size();
         hostObjects.resize(count);
         for (std::size_t k = 0; k < count; ++k) {
             ObjectReprojection& o = hostObjects[k];
-            o.valid = 0;
-            o.currentWorldToPreviousScreen = Mat4{};
+            o = ObjectReprojection{};
             Mat4 inverseModel;
             if (!hasHistory || k >= previousObjectToWorld.size() ||
                 !invert(toMat4(f.objectToWorld[k]), inverseModel))
                 continue;
+            o.currentWorldToPreviousWorld =
+                multiply(toMat4(previousObjectToWorld[k]), inverseModel);
             o.currentWorldToPreviousScreen =
-                multiply(toMat4(previousWorldToScreen),
-                         multiply(toMat4(previousObjectToWorld[k]), inverseModel));
+                multiply(toMat4(previousWorldToScreen), o.currentWorldToPreviousWorld);
             o.valid = 1;
         }
-        if (objects.size() < std::max<std::size_t>(count, 1))
+        if (objects.size() < std::max<std::size_t>(count, 1))  // grows only with K
             objects = DeviceBuffer<ObjectReprojection>(*device, std::max<std::size_t>(count, 1));
         if (count > 0)
             device->copyToDevice(objects.data(), hostObjects.data(),
                                  count * sizeof(ObjectReprojection));
-        int previous = 1 - current;
-        device->launch(ReprojectKernel{gbuffer(), objectId[previous].data(), objects.data(),
-                                       planes(history[previous]), planes(reprojected),
-                                       validity.data(), hasHistory ? 1 : 0},
-                       width(), height());
+    }
+
+    void bindInputs(const Frame& f) {
+        frameHasAlbedo = f.albedo.has_value();
+        struct Source {
+            InputBuffer* in;
+            const void* host;
+            std::size_t bytes;
+        };
+        std::size_t n = pixels();
+        Source sources[] = {
+            {&inBeauty, f.beauty.pixels.data(), 3 * n * sizeof(float)},
+            {&inNormal, f.normal.pixels.data(), 3 * n * sizeof(float)},
+            {&inPosition, f.position.pixels.data(), 3 * n * sizeof(float)},
+            {&inDepth, f.depth.pixels.data(), n * sizeof(float)},
+            {&inId, f.objectId.data(), n * sizeof(std::int32_t)},
+            {&inAlbedo, frameHasAlbedo ? f.albedo->pixels.data() : nullptr,
+             frameHasAlbedo ? 3 * n * sizeof(float) : 0},
+        };
+        for (Source& s : sources) {
+            if (device->sharesHostMemory() || s.host == nullptr) {
+                s.in->device = static_cast<const float*>(s.host);
+            } else {
+                device->copyToDevice(s.in->staging.data(), s.host, s.bytes);
+                s.in->device = s.in->staging.data();
+            }
+        }
+        device->synchronize();
     }
 
     void process(const Frame& f, Image& output) {
@@ -310,27 +462,8 @@ struct Denoiser::Impl {
         frame = &f;
 
         auto start = Clock::now();
-        std::size_t n = pixels();
-        if (device->sharesHostMemory()) {
-            inBeauty = f.beauty.pixels.data();
-            inNormal = f.normal.pixels.data();
-            inPosition = f.position.pixels.data();
-            inDepth = f.depth.pixels.data();
-            inId = f.objectId.data();
-        } else {
-            device->copyToDevice(stageBeauty.data(), f.beauty.pixels.data(), 3 * n * sizeof(float));
-            device->copyToDevice(stageNormal.data(), f.normal.pixels.data(), 3 * n * sizeof(float));
-            device->copyToDevice(stagePosition.data(), f.position.pixels.data(),
-                                 3 * n * sizeof(float));
-            device->copyToDevice(stageDepth.data(), f.depth.pixels.data(), n * sizeof(float));
-            device->copyToDevice(stageId.data(), f.objectId.data(), n * sizeof(std::int32_t));
-            device->synchronize();
-            inBeauty = stageBeauty.data();
-            inNormal = stageNormal.data();
-            inPosition = stagePosition.data();
-            inDepth = stageDepth.data();
-            inId = stageId.data();
-        }
+        bindInputs(f);
+        if (temporal) uploadObjectMatrices(f);
         stats.uploadMilliseconds = millisecondsSince(start);
 
         for (std::size_t p = 0; p < pipeline.size(); ++p) {
@@ -339,7 +472,7 @@ struct Denoiser::Impl {
             device->synchronize();
             stats.passMilliseconds[p] = millisecondsSince(passStart);
         }
-        stats.nonFiniteReplaced = device->sumBytes(nonFinite.data(), n);
+        stats.nonFiniteReplaced = device->sumBytes(nonFinite.data(), pixels());
 
         start = Clock::now();
         if (output.width != width() || output.height != height() || output.channels != 3)
@@ -347,37 +480,61 @@ struct Denoiser::Impl {
         DeviceBuffer<float>& result =
             settings.method == Method::Temporal ? history[current] : *spatialOutput;
         float* packTarget = device->sharesHostMemory() ? output.pixels.data() : stageOutput.data();
-        device->launch(PackKernel{layout, planes(result), packTarget}, width(), height());
+        launch(PackKernel{layout, planes(result), packTarget});
         if (!device->sharesHostMemory())
-            device->copyToHost(output.pixels.data(), stageOutput.data(), 3 * n * sizeof(float));
+            device->copyToHost(output.pixels.data(), stageOutput.data(),
+                               3 * pixels() * sizeof(float));
         device->synchronize();
         stats.downloadMilliseconds = millisecondsSince(start);
 
-        // The output and IDs of this frame are the next frame's history.
+        // This frame's geometry and output are the next frame's history.
         previousObjectToWorld = f.objectToWorld;
         previousWorldToScreen = f.worldToScreen;
-        hasHistory = settings.method == Method::Temporal;
+        hasHistory = temporal;
         current = 1 - current;
         frame = nullptr;
     }
 
-    Image reprojectionDebugImage() const {
-        Image image(width(), height(), 3);
-        if (settings.method != Method::Temporal || width() == 0) return image;
-        std::vector<std::uint8_t> padded(validity.size()), codes(pixels());
-        device->copyToHost(padded.data(), validity.data(), padded.size());
+    // One value per pixel of a padded device plane, on the host.
+    template <class T>
+    std::vector<T> downloadPlane(const T* plane) const {
+        std::vector<T> padded(std::size_t(layout.planeSize)), values(pixels());
+        device->copyToHost(padded.data(), plane, padded.size() * sizeof(T));
         for (int y = 0; y < height(); ++y)
             for (int x = 0; x < width(); ++x)
-                codes[std::size_t(y) * width() + x] = padded[layout.index(x, y)];
-        static const float colours[5][3] = {
-            {0.0f, 1.0f, 0.0f},  // valid: green
-            {1.0f, 0.0f, 0.0f},  // outside the screen: red
-            {1.0f, 1.0f, 0.0f},  // other object: yellow
-            {0.0f, 0.0f, 1.0f},  // background: blue
-            {0.0f, 0.0f, 0.0f},  // no history: black
-        };
-        for (std::size_t i = 0; i < codes.size(); ++i)
-            for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = colours[codes[i] % 5][c];
+                values[std::size_t(y) * width() + x] = padded[layout.index(x, y)];
+        return values;
+    }
+
+    Image debugImage(DebugView view) const {
+        Image image(width(), height(), 3);
+        if (!temporal || width() == 0) return image;
+        int last = previous();  // process() has already flipped `current`
+        if (view == DebugView::Reprojection) {
+            static const float colours[5][3] = {
+                {0.0f, 1.0f, 0.0f},  // valid: green
+                {1.0f, 0.0f, 0.0f},  // outside the screen: red
+                {1.0f, 1.0f, 0.0f},  // other object (or depth/normal disagree): yellow
+                {0.0f, 0.0f, 1.0f},  // background: blue
+                {0.0f, 0.0f, 0.0f},  // no history: black
+            };
+            std::vector<std::uint8_t> codes = downloadPlane(validity.data());
+            for (std::size_t i = 0; i < codes.size(); ++i)
+                for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = colours[codes[i] % 5][c];
+            return image;
+        }
+        if (settings.method != Method::Svgf) return image;
+        // Variance after the variance pass (before A-Trous) shown as its square root, the
+        // luminance standard deviation (clipped at 1); history length as a fraction of the cap.
+        bool variance = view == DebugView::Variance;
+        std::vector<float> values =
+            variance ? downloadPlane(varianceOut.data() + 3 * std::size_t(layout.planeSize))
+                     : downloadPlane(historyLength[last].data());
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            float v = variance ? std::min(1.0f, std::sqrt(std::max(values[i], 0.0f)))
+                               : values[i] / float(settings.svgf.maxHistory);
+            for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = v;
+        }
         return image;
     }
 };
@@ -400,6 +557,6 @@ const DenoiserSettings& Denoiser::settings() const { return impl_->settings; }
 const std::vector<PassInfo>& Denoiser::passes() const { return impl_->passInfos; }
 const FrameStats& Denoiser::lastFrameStats() const { return impl_->stats; }
 std::string Denoiser::deviceName() const { return impl_->device->name(); }
-Image Denoiser::reprojectionDebugImage() const { return impl_->reprojectionDebugImage(); }
+Image Denoiser::debugImage(DebugView view) const { return impl_->debugImage(view); }
 
 }  // namespace rtd

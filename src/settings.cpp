@@ -29,6 +29,21 @@ void validate(const DenoiserSettings& s) {
     require(positive(s.temporal.clampK), "clamp k must be > 0");
     require(s.temporal.clampRadius >= 1 && s.temporal.clampRadius <= 15,
             "clamp radius must be in [1, 15]");
+    require(positive(s.history.depthTolerance), "depth tolerance must be > 0");
+    require(positive(s.history.normalTolerance), "normal tolerance must be > 0");
+    auto unit = [](float v) { return std::isfinite(v) && v >= 0.0f && v <= 1.0f; };
+    require(unit(s.svgf.alpha), "svgf alpha must be in [0, 1]");
+    require(unit(s.svgf.momentsAlpha), "svgf moments alpha must be in [0, 1]");
+    require(positive(s.svgf.sigmaDepth), "svgf sigma-depth must be > 0");
+    require(positive(s.svgf.sigmaNormal), "svgf sigma-normal must be > 0");
+    require(positive(s.svgf.sigmaLuminance), "svgf sigma-luminance must be > 0");
+    require(s.svgf.iterations >= 1 && s.svgf.iterations <= 10,
+            "svgf iterations must be in [1, 10]");
+    require(s.svgf.feedbackIteration >= 0 && s.svgf.feedbackIteration < s.svgf.iterations,
+            "svgf feedback iteration must be in [0, iterations - 1]");
+    require(s.svgf.maxHistory >= 1 && s.svgf.maxHistory <= 1000,
+            "svgf max history must be in [1, 1000]");
+    require(positive(s.svgf.albedoEpsilon), "svgf albedo epsilon must be > 0");
 }
 
 const char* toString(Method method) {
@@ -36,6 +51,7 @@ const char* toString(Method method) {
         case Method::Jbf: return "jbf";
         case Method::Atrous: return "atrous";
         case Method::Temporal: return "temporal";
+        case Method::Svgf: return "svgf";
     }
     return "?";
 }

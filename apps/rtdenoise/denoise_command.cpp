@@ -33,8 +33,10 @@ struct DenoiseOptions {
     bool quiet = false;
 };
 
-const std::map<std::string, Method> kMethods{
-    {"jbf", Method::Jbf}, {"atrous", Method::Atrous}, {"temporal", Method::Temporal}};
+const std::map<std::string, Method> kMethods{{"jbf", Method::Jbf},
+                                             {"atrous", Method::Atrous},
+                                             {"temporal", Method::Temporal},
+                                             {"svgf", Method::Svgf}};
 const std::map<std::string, SpatialFilter> kFilters{{"jbf", SpatialFilter::Jbf},
                                                     {"atrous", SpatialFilter::Atrous}};
 const std::map<std::string, DeviceType> kDevices{
@@ -97,7 +99,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     // images alternate so the one being written is never the one being filled.
     Image results[2];
     std::future<double> writing;  // milliseconds the last write took
-    auto writeAsync = [&](int i, const Image& result, Image debug) {
+    auto writeAsync = [&](int i, const Image& result,
+                          std::vector<std::pair<std::string, Image>> debug) {
         return std::async(std::launch::async, [&, i, debug = std::move(debug)] {
             auto writeStart = Clock::now();
             writeExr(options.output / fmt::format("result_{}.exr", i), result);
@@ -111,8 +114,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
                     video->addFrame(display);
                 }
             }
-            if (!debug.empty())
-                writePng(options.output / fmt::format("reprojection_{}.png", i), debug);
+            for (const auto& [prefix, image] : debug)
+                writePng(options.output / fmt::format("{}_{}.png", prefix, i), image);
             return std::chrono::duration<double, std::milli>(Clock::now() - writeStart).count();
         });
     };
@@ -133,9 +136,15 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
             passTimes[p].push_back(stats.passMilliseconds[p]);
         nonFinite += stats.nonFiniteReplaced;
 
-        Image debug;
-        if (options.debug && settings.method == Method::Temporal)
-            debug = denoiser.reprojectionDebugImage();
+        std::vector<std::pair<std::string, Image>> debug;
+        if (options.debug && (settings.method == Method::Temporal ||
+                              settings.method == Method::Svgf)) {
+            debug.emplace_back("reprojection", denoiser.debugImage(DebugView::Reprojection));
+            if (settings.method == Method::Svgf) {
+                debug.emplace_back("variance", denoiser.debugImage(DebugView::Variance));
+                debug.emplace_back("history", denoiser.debugImage(DebugView::HistoryLength));
+            }
+        }
         if (writing.valid()) writeTimes.push_back(writing.get());  // in order, one at a time
         writing = writeAsync(i, result, std::move(debug));
         progress.update(i + 1);
@@ -232,6 +241,37 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     c.add_option("--clamp-radius", s.temporal.clampRadius,
                  "[1,15] history clamp window half width (3: 7x7)")
         ->capture_default_str();
+    c.add_flag("--geometry-tests,!--no-geometry-tests", s.history.geometryTests,
+               "temporal/svgf: history must also agree in depth and normal (on by default)");
+    c.add_option("--depth-tolerance", s.history.depthTolerance,
+                 "[>0] reject history if |dz| > t * (fwidth(z) + 0.01)")
+        ->capture_default_str();
+    c.add_option("--normal-tolerance", s.history.normalTolerance,
+                 "[>0] reject history if |dn| > t * (fwidth(n) + 0.01)")
+        ->capture_default_str();
+    c.add_option("--svgf-alpha", s.svgf.alpha, "[0,1] svgf colour: current-frame weight floor")
+        ->capture_default_str();
+    c.add_option("--svgf-moments-alpha", s.svgf.momentsAlpha,
+                 "[0,1] svgf luminance moments: current-frame weight floor")
+        ->capture_default_str();
+    c.add_option("--svgf-sigma-depth", s.svgf.sigmaDepth, "[>0] svgf depth tolerance (sigma_z)")
+        ->capture_default_str();
+    c.add_option("--svgf-sigma-normal", s.svgf.sigmaNormal,
+                 "[>0] svgf normal exponent (sigma_n)")
+        ->capture_default_str();
+    c.add_option("--svgf-sigma-luminance", s.svgf.sigmaLuminance,
+                 "[>0] svgf luminance tolerance in standard deviations (sigma_l)")
+        ->capture_default_str();
+    c.add_option("--svgf-iterations", s.svgf.iterations, "[1,10] svgf A-Trous iterations")
+        ->capture_default_str();
+    c.add_option("--svgf-feedback", s.svgf.feedbackIteration,
+                 "[0,iterations-1] svgf iteration whose output is the next colour history")
+        ->capture_default_str();
+    c.add_option("--svgf-max-history", s.svgf.maxHistory, "[1,1000] svgf history length cap")
+        ->capture_default_str();
+    c.add_option("--albedo-epsilon", s.svgf.albedoEpsilon,
+                 "[>0] svgf: illumination = colour / max(albedo, epsilon)")
+        ->capture_default_str();
     c.add_flag("--outlier,!--no-outlier", s.outlier.enabled,
                "Firefly removal before filtering (on by default)");
     c.add_option("--outlier-radius", s.outlier.radius, "[1,15] firefly window half width")
@@ -262,8 +302,9 @@ Command addDenoiseCommand(CLI::App& app) {
         ->check(CLI::Range(1, 240))
         ->capture_default_str();
     c->add_flag("--debug", options->debug,
-                "Write reprojection_<i>.png: history valid green, outside the screen red, other "
-                "object yellow, background blue, no history black");
+                "Write reprojection_<i>.png (history valid green, outside the screen red, other "
+                "object or depth/normal mismatch yellow, background blue, no history black); "
+                "svgf also variance_<i>.png (luminance stddev) and history_<i>.png (length / cap)");
     c->add_option("--frames", options->maxFrames, "Denoise only the first N frames (0: all)")
         ->check(CLI::NonNegativeNumber);
     c->add_flag("-q,--quiet", options->quiet, "No progress or summary");

@@ -30,9 +30,16 @@ struct FrameStats {
 enum class ReprojectionResult : int {
     Valid = 0,
     OutsideScreen = 1,  // drawn red
-    OtherObject = 2,    // drawn yellow
+    OtherObject = 2,    // drawn yellow (also: depth or normal disagree)
     Background = 3,     // drawn blue; valid history is drawn green
     NoHistory = 4,      // first frame, or the size changed: drawn black
+};
+
+// Debug images (Denoiser::debugImage).
+enum class DebugView {
+    Reprojection,   // why history was accepted or rejected, colour-coded (ReprojectionResult)
+    Variance,       // svgf: luminance variance after the variance pass, as grey
+    HistoryLength,  // svgf: frames accumulated per pixel, grey = length / max history
 };
 
 class Denoiser {
@@ -56,8 +63,9 @@ public:
     const FrameStats& lastFrameStats() const;
     std::string deviceName() const;
 
-    // Colour-coded validity of the last back-projection (temporal methods; black otherwise).
-    Image reprojectionDebugImage() const;
+    // A debug view of the last frame (black where the method has no such data).
+    Image debugImage(DebugView view) const;
+    Image reprojectionDebugImage() const { return debugImage(DebugView::Reprojection); }
 
 private:
     struct Impl;

@@ -11,6 +11,7 @@ enum class Method {
     Jbf,       // single frame: brute-force joint bilateral filter
     Atrous,    // single frame: edge-avoiding A-Trous wavelet filter
     Temporal,  // the assignment's pipeline: spatial filter, back-projection, accumulation
+    Svgf,      // spatiotemporal variance-guided filtering (Schied et al. 2017)
 };
 
 enum class SpatialFilter { Jbf, Atrous };
@@ -41,6 +42,26 @@ struct OutlierSettings {
     float k = 2.0f;       // [>0] luminance is clamped to mean + k * stddev of the window
 };
 
+// Which previous-frame pixels may serve as history (temporal and svgf methods).
+struct HistorySettings {
+    bool geometryTests = true;     // also require depth and normal to agree (else: object ID only)
+    float depthTolerance = 10.0f;  // [>0] reject if |dz| > tolerance * (fwidth(z) + 0.01)
+    float normalTolerance = 16.0f; // [>0] reject if |dn| > tolerance * (fwidth(n) + 0.01)
+};
+
+struct SvgfSettings {
+    float alpha = 0.2f;           // [0, 1] colour: weight of the current frame, at least 1/history
+    float momentsAlpha = 0.2f;    // [0, 1] the same for the luminance moments
+    float sigmaDepth = 1.0f;      // [>0] depth tolerance relative to the local depth slope
+    float sigmaNormal = 128.0f;   // [>0] exponent of max(0, n.n')
+    float sigmaLuminance = 4.0f;  // [>0] luminance tolerance in standard deviations
+    int iterations = 5;           // [1, 10] A-Trous iterations, stride 2^i
+    int feedbackIteration = 0;    // [0, iterations-1] its output becomes next frame's colour
+                                  // history (0: the first iteration, the paper's choice)
+    int maxHistory = 32;          // [1, 1000] history length cap (frames)
+    float albedoEpsilon = 1e-3f;  // [>0] illumination = colour / max(albedo, epsilon)
+};
+
 struct TemporalSettings {
     SpatialFilter spatialFilter = SpatialFilter::Atrous;  // filter applied before accumulation
     float alpha = 0.2f;    // [0, 1] weight of the current frame (1 where history is invalid)
@@ -56,6 +77,8 @@ struct DenoiserSettings {
     AtrousSettings atrous;
     OutlierSettings outlier;
     TemporalSettings temporal;
+    HistorySettings history;
+    SvgfSettings svgf;
 };
 
 // Throws rtd::Error(InvalidArgument) naming the first setting out of its range.

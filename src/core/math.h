@@ -32,6 +32,11 @@ RTD_HOST_DEVICE RTD_INLINE Float3& operator+=(Float3& a, Float3 b) {
     return a;
 }
 RTD_HOST_DEVICE RTD_INLINE float dot(Float3 a, Float3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+RTD_HOST_DEVICE RTD_INLINE float square(float v) { return v * v; }
+RTD_HOST_DEVICE RTD_INLINE Float3 normalize(Float3 v) {
+    float length2 = dot(v, v);
+    return length2 > 0.0f ? v * (1.0f / std::sqrt(length2)) : v;
+}
 RTD_HOST_DEVICE RTD_INLINE float minf(float a, float b) { return a < b ? a : b; }
 RTD_HOST_DEVICE RTD_INLINE float maxf(float a, float b) { return a > b ? a : b; }
 RTD_HOST_DEVICE RTD_INLINE float clampf(float v, float lo, float hi) {
@@ -75,6 +80,30 @@ RTD_HOST_DEVICE RTD_INLINE float expNegative(float x) {
 #endif
 }
 
+// ln(x) for normal x > 0: x = 2^e m, m in [1, 2), ln(m) = t q(t) with t = m - 1 and q a degree-6
+// near-minimax fit (|error| < 2.2e-7). Branch-free, so it vectorises.
+RTD_HOST_DEVICE RTD_INLINE float logPositive(float x) {
+#if defined(__CUDA_ARCH__)
+    return __logf(x);
+#else
+    std::int32_t bits;
+    std::memcpy(&bits, &x, sizeof bits);
+    float exponent = float(((bits >> 23) & 0xff) - 127);
+    std::int32_t mantissaBits = (bits & 0x007fffff) | 0x3f800000;
+    float m;
+    std::memcpy(&m, &mantissaBits, sizeof m);
+    float t = m - 1.0f;
+    float q = 1.07644191e-2f;
+    q = q * t - 5.51448824e-2f;
+    q = q * t + 1.34674123e-1f;
+    q = q * t - 2.25897751e-1f;
+    q = q * t + 3.28242120e-1f;
+    q = q * t - 4.99471772e-1f;
+    q = q * t + 9.99981138e-1f;
+    return exponent * 0.693147181f + t * q;
+#endif
+}
+
 // arccos on [-1, 1] (input clamped): acos(|x|) = sqrt(1 - |x|) p(|x|), p a degree-5 near-minimax
 // fit (|error| < 1.2e-6 rad), reflected for x < 0.
 RTD_HOST_DEVICE RTD_INLINE float acosFast(float x) {
@@ -104,6 +133,13 @@ RTD_HOST_DEVICE RTD_INLINE Float4 transformPoint(const Mat4& a, Float3 p) {
             a.m[1][0] * p.x + a.m[1][1] * p.y + a.m[1][2] * p.z + a.m[1][3],
             a.m[2][0] * p.x + a.m[2][1] * p.y + a.m[2][2] * p.z + a.m[2][3],
             a.m[3][0] * p.x + a.m[3][1] * p.y + a.m[3][2] * p.z + a.m[3][3]};
+}
+
+// The upper 3x3 of `a` applied to a direction (no translation).
+RTD_HOST_DEVICE RTD_INLINE Float3 transformVector(const Mat4& a, Float3 v) {
+    return {a.m[0][0] * v.x + a.m[0][1] * v.y + a.m[0][2] * v.z,
+            a.m[1][0] * v.x + a.m[1][1] * v.y + a.m[1][2] * v.z,
+            a.m[2][0] * v.x + a.m[2][1] * v.y + a.m[2][2] * v.z};
 }
 
 // Host-only helpers for per-frame matrix set-up (a handful of matrices per frame).

@@ -13,7 +13,8 @@ struct IngestKernel {
     const float* positionRgb;  // interleaved
     const float* depthIn;      // 1 float per pixel
     const std::int32_t* idIn;  // 1 int per pixel
-    Planes3 beauty, normal, position;
+    const float* albedoRgb;    // interleaved, or null: albedo 1 (no demodulation)
+    Planes3 beauty, albedo, normal, position;
     float* depth;
     std::int32_t* objectId;
     std::uint8_t* nonFiniteCount;  // per pixel (unpadded): radiance values replaced by 0
@@ -30,6 +31,14 @@ struct IngestKernel {
             c[k] = finite ? v : 0.0f;
         }
         beauty.store(i, make3(c[0], c[1], c[2]));
+        // A non-finite albedo cannot be trusted to divide by: treat it as 1.
+        Float3 a = make3(1.0f, 1.0f, 1.0f);
+        if (albedoRgb) {
+            float r = albedoRgb[3 * s], gr = albedoRgb[3 * s + 1], b = albedoRgb[3 * s + 2];
+            bool finite = isFinite(r) && isFinite(gr) && isFinite(b);
+            a = finite ? make3(r, gr, b) : a;
+        }
+        albedo.store(i, a);
         normal.store(i, make3(normalRgb[3 * s], normalRgb[3 * s + 1], normalRgb[3 * s + 2]));
         position.store(i,
                        make3(positionRgb[3 * s], positionRgb[3 * s + 1], positionRgb[3 * s + 2]));

@@ -8,6 +8,7 @@
 #include "kernels/jbf.h"
 #include "kernels/outlier.h"
 #include "kernels/reproject.h"
+#include "kernels/svgf.h"
 #include "kernels/window_sums.h"
 
 #define RTD_FOR_EACH_KERNEL(X) \
@@ -18,5 +19,10 @@
     X(OutlierKernel)           \
     X(JbfKernel)               \
     X(AtrousKernel)            \
+    X(GeometryDerivativesKernel) \
     X(ReprojectKernel)         \
-    X(AccumulateKernel)
+    X(AccumulateKernel)        \
+    X(SvgfTemporalKernel)      \
+    X(SvgfVarianceKernel)      \
+    X(SvgfAtrousKernel)        \
+    X(SvgfModulateKernel)

@@ -40,6 +40,19 @@ struct Planes3 {
     }
 };
 
+// Any number of consecutive planes of one buffer.
+struct PlaneSet {
+    float* data = nullptr;
+    int planeSize = 0;
+    RTD_HOST_DEVICE RTD_INLINE float& at(int plane, int i) const {
+        return data[plane * planeSize + i];
+    }
+    // Planes first..first+2 as a colour.
+    RTD_HOST_DEVICE RTD_INLINE Planes3 rgb(int first = 0) const {
+        return {data + first * planeSize, planeSize};
+    }
+};
+
 // The noise-free geometry of one frame.
 struct GBufferView {
     Layout layout;

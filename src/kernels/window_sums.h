@@ -8,15 +8,6 @@
 
 namespace rtd {
 
-// Consecutive planes of one buffer.
-struct PlaneSet {
-    float* data = nullptr;
-    int planeSize = 0;
-    RTD_HOST_DEVICE RTD_INLINE float& at(int plane, int i) const {
-        return data[plane * planeSize + i];
-    }
-};
-
 // Planes: 0 count, 1 sum of luminance, 2 sum of luminance^2.
 struct LuminanceRowSumsKernel {
     GBufferView g;

@@ -1,0 +1,31 @@
+// Whether a previous-frame pixel may serve as the history of a current pixel (Schied et al. 2017,
+// as in Falcor's SVGF): same object, depth within a tolerance scaled by the local depth change per
+// pixel, normal within a tolerance scaled by the local normal change per pixel. Used by the
+// temporal and SVGF reprojections.
+#pragma once
+
+#include "kernels/views.h"
+
+namespace rtd {
+
+struct HistoryTest {
+    int geometry;           // 0: the object ID alone decides (the assignment's test)
+    float depthTolerance;   // reject if |dz| / (fwidth(z) + 0.01) exceeds it (Falcor: 10)
+    float normalTolerance;  // reject if |dn| / (fwidth(n) + 0.01) exceeds it (Falcor: 16)
+};
+
+// `expectedDepth`/`expectedNormal`: the current surface point seen from the previous frame.
+RTD_HOST_DEVICE RTD_INLINE bool acceptHistory(const HistoryTest& t, std::int32_t id,
+                                              std::int32_t previousId, float expectedDepth,
+                                              float previousDepth, float fwidthDepth,
+                                              Float3 expectedNormal, Float3 previousNormal,
+                                              float fwidthNormal) {
+    if (previousId != id) return false;
+    if (!t.geometry) return true;
+    float dz = expectedDepth - previousDepth;
+    if ((dz < 0 ? -dz : dz) > t.depthTolerance * (fwidthDepth + 0.01f)) return false;
+    Float3 dn = expectedNormal - previousNormal;
+    return dot(dn, dn) <= square(t.normalTolerance * (fwidthNormal + 0.01f));
+}
+
+}  // namespace rtd

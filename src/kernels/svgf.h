@@ -1,0 +1,237 @@
+// Spatiotemporal variance-guided filtering (Schied et al., HPG 2017; reference: Falcor's
+// SVGFPass). Passes: temporal (demodulate by albedo, reproject, accumulate illumination and the
+// first two luminance moments with a per-pixel history length), variance (temporal from the
+// moments, or a 7x7 edge-aware spatial estimate where the history is short), A-Trous iterations
+// guided by the variance, modulate (multiply the albedo back).
+#pragma once
+
+#include "kernels/reproject.h"
+#include "kernels/views.h"
+
+namespace rtd {
+
+struct SvgfTerms {
+    float sigmaDepth;      // sigma_z: depth tolerance relative to the local depth slope
+    float sigmaNormal;     // sigma_n: exponent of max(0, n.n')
+    float sigmaLuminance;  // sigma_l: luminance tolerance in standard deviations
+    int separateObjects;   // pixels of another object never contribute
+};
+
+// ln of the SVGF edge-stopping weight between a centre and a tap:
+//   -|dz| / (sigma_z |grad z . offset| + eps) - |dl| / phiLuminance + sigma_n ln max(0, n.n')
+RTD_HOST_DEVICE RTD_INLINE float svgfLogWeight(const SvgfTerms& t, float depthI, float depthJ,
+                                               float depthAlongOffset, Float3 normalI,
+                                               Float3 normalJ, float lumI, float lumJ,
+                                               float phiLuminance) {
+    float dz = depthI - depthJ;
+    float slope = depthAlongOffset < 0 ? -depthAlongOffset : depthAlongOffset;
+    float wz = (dz < 0 ? -dz : dz) / (t.sigmaDepth * slope + 1e-3f);
+    float dl = lumI - lumJ;
+    float wl = (dl < 0 ? -dl : dl) / phiLuminance;
+    // n.n' <= 0 gives ln(1e-30) * sigma_n: a weight of exactly 0 after the exp.
+    float wn = t.sigmaNormal * logPositive(maxf(dot(normalI, normalJ), 1e-30f));
+    return wn - wz - wl;
+}
+
+RTD_HOST_DEVICE RTD_INLINE float svgfTapMask(const SvgfTerms& t, std::int32_t centreId,
+                                             std::int32_t tapId) {
+    bool ok = t.separateObjects ? tapId == centreId : tapId >= 0;
+    return ok ? 1.0f : 0.0f;
+}
+
+struct SvgfTemporalKernel {
+    GBufferView g;
+    PreviousGeometry previous;
+    const ObjectReprojection* objects;
+    PlaneSet derivatives;
+    HistoryTest test;
+    Planes3 radiance;  // noisy input (after firefly removal)
+    Planes3 albedo;    // 1 where the frame has no albedo: no demodulation
+    float albedoEpsilon;
+    PlaneSet previousIllumination;  // rgb (+ variance, unused here): last frame's feedback
+    PlaneSet previousMoments;       // 2 planes
+    const float* previousLength;
+    Planes3 illumination;  // out
+    PlaneSet moments;      // out, 2 planes
+    float* length;         // out: frames of history, 1 after a disocclusion
+    std::uint8_t* validity;
+    float alpha, momentsAlpha, maxHistory;
+    int hasHistory;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        int i = g.layout.index(x, y);
+        Float3 c = radiance.load(i);
+        HistoryTaps taps = findHistory(g, i, previous, objects, derivatives, test, 1, hasHistory);
+        validity[i] = taps.code;
+        if (g.objectId[i] < 0) {
+            illumination.store(i, c);
+            moments.at(0, i) = 0.0f;
+            moments.at(1, i) = 0.0f;
+            length[i] = 0.0f;
+            return;
+        }
+        Float3 a = albedo.load(i);
+        Float3 current = make3(c.x / maxf(a.x, albedoEpsilon), c.y / maxf(a.y, albedoEpsilon),
+                               c.z / maxf(a.z, albedoEpsilon));
+        float l = luminance(current);
+        if (taps.code != kReprojectionValid) {
+            illumination.store(i, current);
+            moments.at(0, i) = l;
+            moments.at(1, i) = l * l;
+            length[i] = 1.0f;
+            return;
+        }
+        Float3 history;
+        float m1 = 0.0f, m2 = 0.0f, h = 0.0f;
+        Planes3 previousRgb = previousIllumination.rgb();
+        for (int t = 0; t < taps.count; ++t) {
+            int j = taps.index[t];
+            float w = taps.weight[t];
+            history += previousRgb.load(j) * w;
+            m1 += previousMoments.at(0, j) * w;
+            m2 += previousMoments.at(1, j) * w;
+            h += previousLength[j] * w;
+        }
+        h = minf(h + 1.0f, maxHistory);
+        // Equal weights for the first frames of a history, then the exponential average.
+        float a1 = maxf(alpha, 1.0f / h), a2 = maxf(momentsAlpha, 1.0f / h);
+        illumination.store(i, history * (1.0f - a1) + current * a1);
+        moments.at(0, i) = m1 * (1.0f - a2) + l * a2;
+        moments.at(1, i) = m2 * (1.0f - a2) + l * l * a2;
+        length[i] = h;
+    }
+};
+
+// Variance per pixel: from the temporal moments, or where fewer than `shortHistory` frames are
+// accumulated, from the moments of a 7x7 edge-aware neighbourhood (which also filters the
+// illumination), boosted by shortHistory / h for the first frames as in the paper.
+struct SvgfVarianceKernel {
+    GBufferView g;
+    PlaneSet derivatives;
+    Planes3 illumination;
+    PlaneSet moments;
+    const float* length;
+    PlaneSet out;  // rgb + variance
+    SvgfTerms terms;
+    float shortHistory;
+    int radius;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const Layout& L = g.layout;
+        int i = L.index(x, y);
+        Float3 c = illumination.load(i);
+        std::int32_t id = g.objectId[i];
+        float h = length[i];
+        if (id < 0 || h >= shortHistory) {
+            out.rgb().store(i, c);
+            out.at(3, i) = maxf(moments.at(1, i) - square(moments.at(0, i)), 0.0f);
+            return;
+        }
+        float zI = g.depth[i], dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
+        Float3 nI = g.normal.load(i);
+        float lI = luminance(c);
+        Float3 sum;
+        float m1 = 0.0f, m2 = 0.0f, sumW = 0.0f;
+        for (int dy = -radius; dy <= radius; ++dy)
+            for (int dx = -radius; dx <= radius; ++dx) {
+                int j = i + L.offset(dx, dy);
+                Float3 cj = illumination.load(j);
+                float logW = svgfLogWeight(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy),
+                                           nI, g.normal.load(j), lI, luminance(cj),
+                                           terms.sigmaLuminance);
+                float w = svgfTapMask(terms, id, g.objectId[j]) * expNegative(minf(logW, 0.0f));
+                sum += cj * w;
+                m1 += moments.at(0, j) * w;
+                m2 += moments.at(1, j) * w;
+                sumW += w;
+            }
+        float inv = 1.0f / maxf(sumW, 1e-20f);  // the centre has weight 1
+        out.rgb().store(i, sum * inv);
+        out.at(3, i) = maxf(m2 * inv - square(m1 * inv), 0.0f) * (shortHistory / maxf(h, 1.0f));
+    }
+};
+
+// One variance-guided A-Trous iteration: 5x5 B3-spline taps at `stride`, luminance tolerance
+// sigma_l times the 3x3-Gaussian-prefiltered standard deviation; the variance is carried with
+// squared weights, var' = sum w^2 var / (sum w)^2.
+struct SvgfAtrousKernel {
+    GBufferView g;
+    PlaneSet derivatives;
+    PlaneSet in, out;  // rgb + variance
+    int stride;
+    SvgfTerms terms;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        constexpr float kB3[5] = {0.0625f, 0.25f, 0.375f, 0.25f, 0.0625f};
+        constexpr float kGauss[2] = {0.25f, 0.125f};  // 3x3: 1/4 centre, 1/8 edges, 1/16 corners
+        const Layout& L = g.layout;
+        int i = L.index(x, y);
+        std::int32_t id = g.objectId[i];
+        Float3 cI = in.rgb().load(i);
+        if (id < 0) {
+            out.rgb().store(i, cI);
+            out.at(3, i) = in.at(3, i);
+            return;
+        }
+        float prefiltered = 0.0f, prefilterW = 0.0f;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                int j = i + L.offset(dx, dy);
+                float k = (dx == 0 && dy == 0) ? kGauss[0]
+                          : (dx == 0 || dy == 0) ? kGauss[1]
+                                                 : 0.0625f;
+                float m = g.objectId[j] >= 0 ? k : 0.0f;
+                prefiltered += m * in.at(3, j);
+                prefilterW += m;
+            }
+        float phiLuminance =
+            terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f;
+        float zI = g.depth[i], dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
+        Float3 nI = g.normal.load(i);
+        float lI = luminance(cI);
+        Float3 sum;
+        float sumVar = 0.0f, sumW = 0.0f;
+        RTD_UNROLL
+        for (int ty = 0; ty < 5; ++ty) {
+            RTD_UNROLL
+            for (int tx = 0; tx < 5; ++tx) {
+                int ox = (tx - 2) * stride, oy = (ty - 2) * stride;
+                int j = i + L.offset(ox, oy);
+                Float3 cj = in.rgb().load(j);
+                float logW = svgfLogWeight(terms, zI, g.depth[j], dzdx * float(ox) + dzdy * float(oy),
+                                           nI, g.normal.load(j), lI, luminance(cj), phiLuminance);
+                float w = svgfTapMask(terms, id, g.objectId[j]) * (kB3[tx] * kB3[ty]) *
+                          expNegative(minf(logW, 0.0f));
+                sum += cj * w;
+                sumVar += w * w * in.at(3, j);
+                sumW += w;
+            }
+        }
+        float inv = 1.0f / maxf(sumW, 1e-20f);  // the centre alone gives (3/8)^2
+        out.rgb().store(i, sum * inv);
+        out.at(3, i) = sumVar * inv * inv;
+    }
+};
+
+// Final modulation: illumination times the albedo it was divided by; background passes through.
+struct SvgfModulateKernel {
+    GBufferView g;
+    Planes3 illumination;
+    Planes3 albedo;
+    Planes3 radiance;  // for background pixels
+    Planes3 out;
+    float albedoEpsilon;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        int i = g.layout.index(x, y);
+        if (g.objectId[i] < 0) {
+            out.store(i, radiance.load(i));
+            return;
+        }
+        Float3 a = albedo.load(i), c = illumination.load(i);
+        out.store(i, make3(c.x * maxf(a.x, albedoEpsilon), c.y * maxf(a.y, albedoEpsilon),
+                           c.z * maxf(a.z, albedoEpsilon)));
+    }
+};
+
+}  // namespace rtd
