@@ -6,7 +6,7 @@
 #include <cmath>
 #include <vector>
 
-#include "devices/device.h"
+#include "kernel_harness.h"
 
 namespace rtd {
 namespace {
@@ -39,69 +39,6 @@ TEST(FastMath, MatrixInverseRoundTrips) {
     Mat4 singular{};
     EXPECT_FALSE(invert(singular, inverse));
 }
-
-// Padded planar buffers for a w x h image, as the Denoiser lays them out.
-struct Harness {
-    std::unique_ptr<Device> device = createCpuDevice();
-    Layout layout;
-    DeviceBuffer<float> normal, position, depth, a, b, c, sums;
-    DeviceBuffer<std::int32_t> ids;
-    DeviceBuffer<std::uint8_t> validity;
-
-    Harness(int w, int h, int padding) {
-        layout.width = w;
-        layout.height = h;
-        layout.padding = padding;
-        layout.pitch = w + 2 * padding;
-        layout.origin = padding * layout.pitch + padding;
-        layout.planeSize = layout.pitch * (h + 2 * padding);
-        std::size_t n = std::size_t(layout.planeSize);
-        for (auto* buffer : {&normal, &position, &a, &b, &c}) {
-            *buffer = DeviceBuffer<float>(*device, 3 * n);
-            device->fill(buffer->data(), 0, buffer->bytes());
-        }
-        depth = DeviceBuffer<float>(*device, n);
-        sums = DeviceBuffer<float>(*device, 7 * n);
-        device->fill(sums.data(), 0, sums.bytes());
-        ids = DeviceBuffer<std::int32_t>(*device, n);
-        device->fill(ids.data(), 0xff, ids.bytes());
-        validity = DeviceBuffer<std::uint8_t>(*device, n);
-        // A flat wall facing the camera, one object.
-        Planes3 nrm = planes(normal), pos = planes(position);
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) {
-                int i = layout.index(x, y);
-                nrm.store(i, make3(0, 0, -1));
-                pos.store(i, make3(float(x), float(y), 5.0f));
-                ids.data()[i] = 0;
-            }
-    }
-    Planes3 planes(const DeviceBuffer<float>& buffer) const {
-        return {buffer.data(), layout.planeSize};
-    }
-    PlaneSet sumPlanes() const { return {sums.data(), layout.planeSize}; }
-    // Row pass then column pass, as the Denoiser runs them.
-    void accumulate(float alpha, float k, int radius) {
-        int w = layout.width, h = layout.height;
-        device->launch(ColorRowSumsKernel{gbuffer(), planes(a), sumPlanes(), radius}, w, h);
-        device->launch(AccumulateKernel{gbuffer(), sumPlanes(), planes(a), planes(b),
-                                        validity.data(), planes(c), alpha, k, radius},
-                       w, h);
-    }
-    void removeOutliers(int radius, float k) {
-        int w = layout.width, h = layout.height;
-        device->launch(LuminanceRowSumsKernel{gbuffer(), planes(a), sumPlanes(), radius}, w, h);
-        device->launch(OutlierKernel{gbuffer(), sumPlanes(), planes(a), planes(b), radius, k}, w,
-                       h);
-    }
-    GBufferView gbuffer() const {
-        return {layout, planes(normal), planes(position), depth.data(), ids.data()};
-    }
-    void setAll(const DeviceBuffer<float>& buffer, Float3 v) {
-        for (int y = 0; y < layout.height; ++y)
-            for (int x = 0; x < layout.width; ++x) planes(buffer).store(layout.index(x, y), v);
-    }
-};
 
 EdgeStoppingTerms wideOpenTerms() {
     // Colour sigma so large that the colour term vanishes: weights are the B3 taps alone.

@@ -1,0 +1,86 @@
+// Kernels run directly on the CPU device over padded buffers built like the Denoiser's, for
+// kernel-level known-answer tests.
+#pragma once
+
+#include <memory>
+
+#include "devices/device.h"
+
+namespace rtd {
+
+// Padded planar buffers for a w x h image, as the Denoiser lays them out.
+struct Harness {
+    // A flat wall facing the camera (normal -z, z = 5), one object, everything else 0.
+    std::unique_ptr<Device> device = createCpuDevice();
+    Layout layout;
+    DeviceBuffer<float> normal, position, depth, a, b, c, sums;
+    DeviceBuffer<std::int32_t> ids;
+    DeviceBuffer<std::uint8_t> validity;
+
+    Harness(int w, int h, int padding) {
+        layout.width = w;
+        layout.height = h;
+        layout.padding = padding;
+        layout.pitch = w + 2 * padding;
+        layout.origin = padding * layout.pitch + padding;
+        layout.planeSize = layout.pitch * (h + 2 * padding);
+        std::size_t n = std::size_t(layout.planeSize);
+        for (auto* buffer : {&normal, &position, &a, &b, &c}) {
+            *buffer = DeviceBuffer<float>(*device, 3 * n);
+            device->fill(buffer->data(), 0, buffer->bytes());
+        }
+        depth = DeviceBuffer<float>(*device, n);
+        device->fill(depth.data(), 0, depth.bytes());
+        sums = DeviceBuffer<float>(*device, 7 * n);
+        device->fill(sums.data(), 0, sums.bytes());
+        ids = DeviceBuffer<std::int32_t>(*device, n);
+        device->fill(ids.data(), 0xff, ids.bytes());
+        validity = DeviceBuffer<std::uint8_t>(*device, n);
+        // A flat wall facing the camera, one object.
+        Planes3 nrm = planes(normal), pos = planes(position);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                int i = layout.index(x, y);
+                nrm.store(i, make3(0, 0, -1));
+                pos.store(i, make3(float(x), float(y), 5.0f));
+                depth.data()[i] = 5.0f;
+                ids.data()[i] = 0;
+            }
+    }
+    // Another zero-filled padded buffer of `count` planes.
+    DeviceBuffer<float> buffer(int count) {
+        DeviceBuffer<float> b(*device, std::size_t(count) * std::size_t(layout.planeSize));
+        device->fill(b.data(), 0, b.bytes());
+        return b;
+    }
+    PlaneSet planeSet(const DeviceBuffer<float>& buffer) const {
+        return {buffer.data(), layout.planeSize};
+    }
+    Planes3 planes(const DeviceBuffer<float>& buffer) const {
+        return {buffer.data(), layout.planeSize};
+    }
+    PlaneSet sumPlanes() const { return {sums.data(), layout.planeSize}; }
+    // Row pass then column pass, as the Denoiser runs them.
+    void accumulate(float alpha, float k, int radius) {
+        int w = layout.width, h = layout.height;
+        device->launch(ColorRowSumsKernel{gbuffer(), planes(a), sumPlanes(), radius}, w, h);
+        device->launch(AccumulateKernel{gbuffer(), sumPlanes(), planes(a), planes(b),
+                                        validity.data(), planes(c), alpha, k, radius},
+                       w, h);
+    }
+    void removeOutliers(int radius, float k) {
+        int w = layout.width, h = layout.height;
+        device->launch(LuminanceRowSumsKernel{gbuffer(), planes(a), sumPlanes(), radius}, w, h);
+        device->launch(OutlierKernel{gbuffer(), sumPlanes(), planes(a), planes(b), radius, k}, w,
+                       h);
+    }
+    GBufferView gbuffer() const {
+        return {layout, planes(normal), planes(position), depth.data(), ids.data()};
+    }
+    void setAll(const DeviceBuffer<float>& buffer, Float3 v) {
+        for (int y = 0; y < layout.height; ++y)
+            for (int x = 0; x < layout.width; ++x) planes(buffer).store(layout.index(x, y), v);
+    }
+};
+
+}  // namespace rtd

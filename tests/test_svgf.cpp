@@ -1,0 +1,254 @@
+// SVGF: known answers for its passes (kernel level) and its behaviour through the public API.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "kernel_harness.h"
+#include "test_support.h"
+
+namespace rtd {
+namespace {
+
+SvgfTerms paperTerms() { return {1.0f, 128.0f, 4.0f, 1}; }
+
+TEST(SvgfKernels, VarianceIsPropagatedWithSquaredWeights) {
+    // Flat wall, constant illumination (luminance term 0), constant variance v: every weight is
+    // its B3 tap, so var' = v * (sum of squared 1-D taps)^2 = v * 0.2734375^2.
+    Harness h(21, 21, 8);
+    DeviceBuffer<float> in = h.buffer(4), out = h.buffer(4), derivatives = h.buffer(3);
+    const float v = 0.5f;
+    for (int y = 0; y < 21; ++y)
+        for (int x = 0; x < 21; ++x) {
+            int i = h.layout.index(x, y);
+            h.planeSet(in).rgb().store(i, make3(0.7f, 0.7f, 0.7f));
+            h.planeSet(in).at(3, i) = v;
+        }
+    for (int stride : {1, 2, 4}) {
+        h.device->launch(SvgfAtrousKernel{h.gbuffer(), h.planeSet(derivatives), h.planeSet(in),
+                                          h.planeSet(out), stride, paperTerms()},
+                         21, 21);
+        int centre = h.layout.index(10, 10);
+        EXPECT_NEAR(h.planeSet(out).at(3, centre), v * 0.2734375f * 0.2734375f, 1e-6f)
+            << "stride " << stride;
+        EXPECT_NEAR(h.planeSet(out).rgb().load(centre).x, 0.7f, 1e-6f);
+    }
+}
+
+TEST(SvgfKernels, LuminanceEdgeStopsScaleWithTheStandardDeviation) {
+    // A luminance step of 1 between halves: with variance 1e-4 (stddev 0.01) it is 25 sigma_l
+    // wide and nothing crosses; with variance 100 (stddev 10) it is blurred.
+    for (float variance : {1e-4f, 100.0f}) {
+        Harness h(20, 9, 8);
+        DeviceBuffer<float> in = h.buffer(4), out = h.buffer(4), derivatives = h.buffer(3);
+        for (int y = 0; y < 9; ++y)
+            for (int x = 0; x < 20; ++x) {
+                int i = h.layout.index(x, y);
+                float value = x < 10 ? 1.0f : 2.0f;
+                h.planeSet(in).rgb().store(i, make3(value, value, value));
+                h.planeSet(in).at(3, i) = variance;
+            }
+        h.device->launch(SvgfAtrousKernel{h.gbuffer(), h.planeSet(derivatives), h.planeSet(in),
+                                          h.planeSet(out), 1, paperTerms()},
+                         20, 9);
+        float edge = h.planeSet(out).rgb().load(h.layout.index(9, 4)).x;
+        if (variance < 1.0f)
+            EXPECT_NEAR(edge, 1.0f, 1e-4f);
+        else
+            EXPECT_GT(edge, 1.1f);
+    }
+}
+
+TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
+    // A static wall of noisy constant radiance; alpha 0 makes the accumulation a plain running
+    // mean over the history (up to the cap), so the noise variance of the accumulated
+    // illumination after n frames is the per-frame variance / n, and the moments' variance
+    // estimate is the per-frame variance (uniform noise of half-width 0.5: 1/12).
+    const int w = 64, hgt = 64;
+    Harness h(w, hgt, 4);
+    DeviceBuffer<float> albedo = h.buffer(3), derivatives = h.buffer(3);
+    DeviceBuffer<float> illumination[2] = {h.buffer(4), h.buffer(4)};
+    DeviceBuffer<float> moments[2] = {h.buffer(2), h.buffer(2)};
+    DeviceBuffer<float> length[2] = {h.buffer(1), h.buffer(1)};
+    DeviceBuffer<float> normalPlanes = h.buffer(3);
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x) {
+            h.planes(albedo).store(h.layout.index(x, y), make3(1, 1, 1));
+            h.validity.data()[h.layout.index(x, y)] = 0;
+        }
+    ObjectReprojection identity{};
+    // The harness's wall pixel (x, y) is world (x, y, 5): this maps it to s = (5x + 2.5,
+    // 5y + 2.5, 5, 5), i.e. pixel centre (x + 0.5, y + 0.5) at depth w = 5 (a static camera).
+    identity.currentWorldToPreviousScreen =
+        Mat4{{{5, 0, 0, 2.5f}, {0, 5, 0, 2.5f}, {0, 0, 1, 0}, {0, 0, 1, 0}}};
+    identity.currentWorldToPreviousWorld = Mat4{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0},
+                                                 {0, 0, 0, 1}}};
+    identity.valid = 1;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> noise(-0.5f, 0.5f);
+    double firstVariance = 0.0;
+    for (int n = 1; n <= 16; ++n) {
+        int cur = n % 2, prev = 1 - cur;
+        for (int y = 0; y < hgt; ++y)
+            for (int x = 0; x < w; ++x) {
+                float v = 1.0f + noise(rng);
+                h.planes(h.a).store(h.layout.index(x, y), make3(v, v, v));
+            }
+        PreviousGeometry previous{h.ids.data(), h.depth.data(), h.planes(h.normal)};
+        h.device->launch(
+            SvgfTemporalKernel{h.gbuffer(), previous, &identity, h.planeSet(derivatives),
+                               HistoryTest{1, 10.0f, 16.0f}, h.planes(h.a), h.planes(albedo),
+                               1e-3f, h.planeSet(illumination[prev]), h.planeSet(moments[prev]),
+                               length[prev].data(), h.planes(illumination[cur]),
+                               h.planeSet(moments[cur]), length[cur].data(), h.validity.data(),
+                               0.0f, 0.0f, 32.0f, n > 1 ? 1 : 0},
+            w, hgt);
+        double sum = 0, sum2 = 0, varianceEstimate = 0;
+        for (int y = 0; y < hgt; ++y)
+            for (int x = 0; x < w; ++x) {
+                int i = h.layout.index(x, y);
+                double v = h.planes(illumination[cur]).load(i).x;
+                sum += v;
+                sum2 += v * v;
+                varianceEstimate += h.planeSet(moments[cur]).at(1, i) -
+                                    std::pow(h.planeSet(moments[cur]).at(0, i), 2);
+                ASSERT_EQ(length[cur].data()[i], float(n));
+            }
+        double count = double(w) * hgt;
+        double variance = sum2 / count - std::pow(sum / count, 2);
+        if (n == 1) firstVariance = variance;
+        EXPECT_NEAR(variance * n / firstVariance, 1.0, 0.15) << "after " << n << " frames";
+        if (n >= 8) EXPECT_NEAR(varianceEstimate / count, 1.0 / 12.0, 0.012) << n;
+    }
+}
+
+// ---- through the public API ----
+
+using test::makeFrame;
+using test::SceneDescription;
+
+DenoiserSettings svgfSettings() {
+    DenoiserSettings s = test::cpuSettings(Method::Svgf);
+    return s;
+}
+
+TEST(Svgf, ConstantIlluminationStaysConstantAndTextureIsKept) {
+    // Radiance = albedo (a checker) * constant illumination 0.8: demodulation gives a constant,
+    // every pass keeps it, remodulation restores the checker exactly.
+    SceneDescription d;
+    d.width = 40;
+    d.height = 32;
+    auto checker = [](int x, int y) { return ((x / 2 + y / 2) % 2) ? 0.9f : 0.2f; };
+    d.colour = [&](int x, int y) {
+        float a = checker(x, y);
+        return std::array<float, 3>{0.8f * a, 0.8f * a * 0.5f, 0.8f * a * 0.25f};
+    };
+    Frame frame = makeFrame(d);
+    Image albedo(d.width, d.height, 3);
+    for (int y = 0; y < d.height; ++y)
+        for (int x = 0; x < d.width; ++x) {
+            albedo.at(x, y, 0) = checker(x, y);
+            albedo.at(x, y, 1) = checker(x, y) * 0.5f;
+            albedo.at(x, y, 2) = checker(x, y) * 0.25f;
+        }
+    frame.albedo = albedo;
+    Denoiser denoiser(svgfSettings());
+    for (int i = 0; i < 4; ++i) {
+        Image out = denoiser.processFrame(frame);
+        for (std::size_t k = 0; k < out.pixels.size(); ++k)
+            ASSERT_NEAR(out.pixels[k], frame.beauty.pixels[k], 1e-5f) << "frame " << i;
+    }
+}
+
+TEST(Svgf, WithoutAlbedoAConstantImageIsUnchanged) {
+    SceneDescription d;
+    d.objectCount = 2;
+    d.id = [](int x, int) { return x < 12 ? 0 : 1; };
+    d.depth = [](int x, int) { return x < 12 ? 3.0f : 5.0f; };
+    d.colour = [](int, int) { return std::array<float, 3>{0.3f, 0.6f, 0.9f}; };
+    Frame frame = makeFrame(d);
+    Denoiser denoiser(svgfSettings());
+    for (int i = 0; i < 3; ++i) {
+        Image out = denoiser.processFrame(frame);
+        for (std::size_t k = 0; k < out.pixels.size(); ++k)
+            ASSERT_NEAR(out.pixels[k], frame.beauty.pixels[k], 1e-5f);
+    }
+}
+
+TEST(Svgf, HistoryLengthGrowsAndResetsWhereAnObjectUncoversTheWall) {
+    // Object 0 (x in [8, 16)) slides 3 pixels right per frame in front of a wall (object 1).
+    const float z = 4.0f;
+    auto scene = [&](int frame) {
+        SceneDescription d;
+        d.objectCount = 2;
+        int left = 8 + 3 * frame;
+        d.id = [left](int x, int) { return x >= left && x < left + 8 ? 0 : 1; };
+        d.depth = [left, z](int x, int) { return x >= left && x < left + 8 ? z - 1.0f : z; };
+        Frame f = makeFrame(d);
+        f.objectToWorld[0] = test::translation(test::worldShiftForPixels(3.0f * frame, z - 1.0f),
+                                               0, 0);
+        return f;
+    };
+    Denoiser denoiser(svgfSettings());
+    const int frames = 4;
+    for (int i = 0; i < frames; ++i) denoiser.processFrame(scene(i));
+    Image length = denoiser.debugImage(DebugView::HistoryLength);
+    const float cap = 32.0f;
+    // Static wall far from the object: every frame accumulated.
+    EXPECT_NEAR(length.at(30, 10, 0), frames / cap, 1e-6f);
+    // Uncovered by the object's last move (wall pixels left-3..left-1): their own history was
+    // the object. Two of them have no wall pixel in their 3x3 either: history starts again;
+    // the third finds the wall next to it through the 3x3 search and continues.
+    int left = 8 + 3 * (frames - 1);
+    for (int x = left - 2; x < left; ++x) EXPECT_NEAR(length.at(x, 10, 0), 1.0f / cap, 1e-6f) << x;
+    EXPECT_NEAR(length.at(left - 3, 10, 0), 2.0f / cap, 1e-6f);
+    // The object itself carries its history along.
+    EXPECT_NEAR(length.at(left + 4, 10, 0), frames / cap, 1e-6f);
+    Image reprojection = denoiser.debugImage(DebugView::Reprojection);
+    EXPECT_EQ(reprojection.at(left - 1, 10, 0), 1.0f);  // yellow: rejected (other object)
+    EXPECT_EQ(reprojection.at(30, 10, 1), 1.0f);        // green: valid
+}
+
+TEST(Svgf, NoBleedingAcrossObjectBoundaries) {
+    SceneDescription d;
+    d.width = 32;
+    d.objectCount = 2;
+    d.id = [](int x, int) { return x < 16 ? 0 : 1; };
+    d.colour = [](int x, int) {
+        return x < 16 ? std::array<float, 3>{1.0f, 0.2f, 0.2f}
+                      : std::array<float, 3>{0.2f, 0.2f, 1.0f};
+    };
+    Frame frame = makeFrame(d);
+    test::addNoise(frame, 0.05f, 11);
+    Denoiser denoiser(svgfSettings());
+    Image out;
+    for (int i = 0; i < 3; ++i) out = denoiser.processFrame(frame);
+    for (int y = 0; y < d.height; ++y) {
+        EXPECT_LT(out.at(15, y, 2), 0.3f);  // red side: no blue from the right
+        EXPECT_LT(out.at(16, y, 0), 0.3f);  // blue side: no red from the left
+    }
+}
+
+TEST(Svgf, ReducesNoiseOnAStaticNoisyWall) {
+    SceneDescription d;
+    d.width = 48;
+    d.height = 48;
+    d.colour = [](int, int) { return std::array<float, 3>{0.5f, 0.5f, 0.5f}; };
+    Denoiser denoiser(svgfSettings());
+    Image out;
+    double inputError = 0, outputError = 0;
+    for (int i = 0; i < 8; ++i) {
+        Frame frame = makeFrame(d);
+        test::addNoise(frame, 0.4f, unsigned(100 + i));
+        out = denoiser.processFrame(frame);
+        if (i == 7)
+            for (std::size_t k = 0; k < out.pixels.size(); ++k) {
+                inputError += std::pow(frame.beauty.pixels[k] - 0.5, 2);
+                outputError += std::pow(out.pixels[k] - 0.5, 2);
+            }
+    }
+    EXPECT_LT(outputError, inputError / 50.0);
+}
+
+}  // namespace
+}  // namespace rtd
