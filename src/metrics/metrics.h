@@ -1,0 +1,139 @@
+// Quality metrics of a denoised sequence against its reference, and contact sheets for looking
+// at the difference. Separate from the denoiser library: the renderer's build never needs them.
+//
+// Which space each metric lives in:
+//   - MSE and relMSE on the linear RGB radiance (what the denoiser estimates);
+//   - PSNR, SSIM and the temporal error on the display images, toneMap(x, exposure): values in
+//     [0,1], the space a viewer judges (and the one SSIM's constants are defined for).
+// "Display" arguments below are such tone-mapped 3-channel images.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "rtdenoise/image.h"
+
+namespace rtd::metrics {
+
+// SSIM constants (Wang et al. 2004) for data in [0,1]: C1 = (0.01 L)^2, C2 = (0.03 L)^2, L = 1.
+inline constexpr double kSsimC1 = 0.01 * 0.01;
+inline constexpr double kSsimC2 = 0.03 * 0.03;
+inline constexpr int kSsimRadius = 5;           // 11x11 window
+inline constexpr double kSsimSigma = 1.5;       // Gaussian window sigma, pixels
+inline constexpr double kRelMseEpsilon = 0.01;  // relMSE denominator: r^2 + 0.01
+
+// ---- single metrics ----
+
+// Mean over pixels and channels of (x - r)^2, linear values. NaN in x propagates (a broken result
+// must not look good).
+double mse(const Image& result, const Image& reference);
+
+// Mean over pixels and channels of (x - r)^2 / (r^2 + 0.01) (pbrt's relative MSE), linear values.
+double relMse(const Image& result, const Image& reference);
+
+// 10 log10(1 / MSE) in dB of two display images; +infinity when they are identical.
+double psnr(const Image& resultDisplay, const Image& referenceDisplay);
+
+// Mean SSIM of two display images: the SSIM map of each of R, G, B with an 11x11 Gaussian window
+// (sigma 1.5), averaged over pixels and then over the three channels. At the borders the window
+// is restricted to the pixels inside the image and its weights renormalised, so every pixel
+// counts and images smaller than the window work.
+double ssim(const Image& resultDisplay, const Image& referenceDisplay);
+
+// Mean over pixels and channels of |(x_t - x_{t-1}) - (r_t - r_{t-1})| on display images: zero
+// when the result changes exactly as the reference does; flicker and lag both raise it.
+double temporalError(const Image& resultDisplay, const Image& previousResultDisplay,
+                     const Image& referenceDisplay, const Image& previousReferenceDisplay);
+
+// ---- per frame and per sequence ----
+
+struct FrameMetrics {
+    double mse = 0.0;
+    double relMse = 0.0;
+    double psnr = 0.0;  // dB; +infinity for identical display images
+    double ssim = 1.0;
+    std::optional<double> temporalError;  // absent for frame 0 (no previous frame)
+};
+
+// MSE and relMSE of the linear images; PSNR and SSIM of toneMap(., exposure). No temporal error.
+FrameMetrics compareFrame(const Image& result, const Image& reference, float exposure = 1.0f);
+
+// Means over frames. The temporal error's mean is over the frames that have one (1..N-1), absent
+// when none does. PSNR is the mean of the per-frame dB values, so one identical frame makes the
+// mean infinite.
+FrameMetrics meanOf(const std::vector<FrameMetrics>& frames);
+
+struct SequenceMetrics {
+    std::vector<FrameMetrics> frames;
+    FrameMetrics mean;
+};
+
+// Compares a sequence frame by frame, holding only the previous frame's display images: what a
+// caller streaming 4K frames from disk uses.
+class SequenceComparer {
+  public:
+    explicit SequenceComparer(float exposure = 1.0f);
+
+    // Metrics of the next frame (temporal error against the frame added before it).
+    const FrameMetrics& addFrame(const Image& result, const Image& reference);
+
+    const std::vector<FrameMetrics>& frames() const { return frames_; }
+    SequenceMetrics metrics() const { return {frames_, meanOf(frames_)}; }
+
+  private:
+    float exposure_;
+    std::vector<FrameMetrics> frames_;
+    Image previousResult_;  // display images of the previous frame
+    Image previousReference_;
+};
+
+// All frames at once; `results` and `references` must have the same length.
+SequenceMetrics compareSequence(const std::vector<Image>& results,
+                                const std::vector<Image>& references, float exposure = 1.0f);
+
+// ---- images ----
+
+// Per-pixel relative error e = sqrt(mean_c (x - r)^2 / (r^2 + 0.01)) (the root of relMSE's
+// per-pixel term) on a log scale: minError and below map to the colour map's dark end,
+// maxError and above to its bright end. Colour map: viridis (perceptually uniform, readable in
+// grey and by colour-blind viewers).
+struct HeatMapScale {
+    double minError = 1e-3;  // 0.1 %
+    double maxError = 1.0;   // 100 %
+};
+
+// Viridis at t in [0,1] (clamped), display-encoded RGB.
+void viridis(double t, float rgb[3]);
+
+// The heat map of `result` against `reference` (linear images), display-encoded.
+Image errorHeatMap(const Image& result, const Image& reference, const HeatMapScale& scale = {});
+
+struct ContactSheetOptions {
+    float exposure = 1.0f;
+    int gap = 4;         // pixels between panels, and above the legend
+    bool legend = true;  // a colour bar with the heat map's scale under its panel
+    HeatMapScale scale;
+};
+
+// Where the panels of a contact sheet lie: panel p's top-left corner is (p * (width + gap), 0).
+struct ContactSheetLayout {
+    int panelWidth = 0;
+    int panelHeight = 0;
+    int panels = 0;
+    int gap = 0;
+    int legendHeight = 0;  // rows below the panels (0 without legend), gap included
+    int width() const { return panels * panelWidth + (panels - 1) * gap; }
+    int height() const { return panelHeight + legendHeight; }
+    int panelX(int panel) const { return panel * (panelWidth + gap); }
+};
+ContactSheetLayout contactSheetLayout(int panelWidth, int panelHeight, int panels,
+                                      const ContactSheetOptions& options = {});
+
+// input | result | reference | error heat map, side by side (input, when null, is left out: three
+// panels), each tone-mapped with options.exposure; the gaps and the legend strip are dark grey.
+// Display-encoded, ready for rtd::writePng. All images must have the same size.
+Image contactSheet(const Image* input, const Image& result, const Image& reference,
+                   const ContactSheetOptions& options = {});
+
+}  // namespace rtd::metrics
