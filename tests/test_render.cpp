@@ -1,3 +1,572 @@
-// placeholder: tests land with the render module
+// The test-scene renderer against known answers: the white furnace and area lights with analytic
+// irradiance, the reference against independent 1-spp frames, G-buffers against the matrices,
+// back-projection of moving objects, determinism, the written folder and the command line.
 #include <gtest/gtest.h>
-TEST(Placeholder, render) { GTEST_SKIP() << "not written yet"; }
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "render/path_tracer.h"
+#include "render/render_sequence.h"
+#include "render/scenes.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+
+namespace rtd::render {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Mean of channel c over all pixels, and its standard error from the spread of the pixels
+// (pixels use disjoint random streams, so they are independent estimates).
+struct Estimate {
+    double mean = 0.0;
+    double standardError = 0.0;
+};
+
+Estimate pixelMean(const Image& image, int c) {
+    double sum = 0.0, sum2 = 0.0;
+    const double n = double(image.pixelCount());
+    for (std::size_t p = 0; p < image.pixelCount(); ++p) {
+        double v = image.pixels[p * image.channels + c];
+        sum += v;
+        sum2 += v * v;
+    }
+    double mean = sum / n;
+    double variance = std::max(0.0, (sum2 - n * mean * mean) / (n - 1.0));
+    return {mean, std::sqrt(variance / n)};
+}
+
+// Point of Matrix4 * (p, 1) divided by w.
+Vec3 project(const Matrix4& m, Vec3 p, float& w) {
+    Vec4 s = transformPoint(m, p);
+    w = s.w;
+    return {s.x / s.w, s.y / s.w, s.z / s.w};
+}
+
+Vec3 pixelVec(const Image& image, int x, int y) {
+    return {image.at(x, y, 0), image.at(x, y, 1), image.at(x, y, 2)};
+}
+
+Vec3 applyAffine(const Affine& a, Vec3 p) {
+    return a.point(p);
+}
+
+// Distance from a local-space point to the surface of a primitive.
+float distanceToSurface(const Primitive& prim, Vec3 p) {
+    switch (prim.kind) {
+        case Primitive::Kind::Box: {
+            Vec3 centre = (prim.p0 + prim.p1) * 0.5f, half = (prim.p1 - prim.p0) * 0.5f;
+            Vec3 q = max(p - centre, centre - p) - half;
+            float outside = length(max(q, Vec3(0.0f)));
+            float inside = std::min(maxComponent(q), 0.0f);
+            return std::abs(outside + inside);
+        }
+        case Primitive::Kind::Sphere:
+            return std::abs(length(p - prim.p0) - prim.p1.x);
+        case Primitive::Kind::Quad: {
+            Vec3 n = normalize(cross(prim.p1, prim.p2));
+            Vec3 rel = p - prim.p0;
+            float a = dot(rel, prim.p1) / dot(prim.p1, prim.p1);
+            float b = dot(rel, prim.p2) / dot(prim.p2, prim.p2);
+            if (a < -1e-3f || a > 1.001f || b < -1e-3f || b > 1.001f) return 1e9f;
+            return std::abs(dot(rel, n));
+        }
+    }
+    return 1e9f;
+}
+
+int objectIndex(const Scene& scene, const std::string& name) {
+    for (std::size_t k = 0; k < scene.objects.size(); ++k)
+        if (scene.objects[k].name == name) return int(k);
+    ADD_FAILURE() << "no object " << name;
+    return -1;
+}
+
+// ---- known answers ----
+
+TEST(Render, WhiteFurnaceConvergesToItsAnalyticValue) {
+    const Scene scene = buildScene("furnace", 0);
+    const double a = kFurnaceAlbedo, le = kFurnaceEmission;
+    for (int depth : {1, 3, 8, 64}) {
+        TraceSettings t;
+        t.width = 32;
+        t.height = 24;
+        t.samplesPerPixel = 64;
+        t.maxDepth = depth;
+        Image image = renderRadiance(scene, t);
+        // Emission counted at hits 1..depth: Le (1 + a + ... + a^(depth-1)).
+        double expected = le * (1.0 - std::pow(a, depth)) / (1.0 - a);
+        for (int c = 0; c < 3; ++c) {
+            Estimate e = pixelMean(image, c);
+            if (depth <= 3) {
+                // Russian roulette starts at the third hit and cosine sampling makes f cos / pdf
+                // = a exactly: every path returns the same value.
+                EXPECT_NEAR(e.mean, expected, 1e-5) << "depth " << depth;
+                EXPECT_LT(e.standardError, 1e-6) << "depth " << depth;
+            } else {
+                // 768 independent pixels of 64 paths each: 5 standard errors (estimated from the
+                // pixels' spread) leave a false alarm once in ~2 million runs, and the error
+                // must be small enough (< 0.5 %) that a 2 % bias cannot hide in it.
+                EXPECT_LT(e.standardError, 0.005 * expected) << "depth " << depth;
+                EXPECT_NEAR(e.mean, expected, 5.0 * e.standardError) << "depth " << depth;
+            }
+        }
+    }
+}
+
+// A Lambertian floor (albedo rho) under an area light of radiance Le with nothing else: the
+// radiance leaving the floor is rho Le F, F the point-to-light form factor. Next-event estimation
+// and BSDF sampling both reach the light, so a wrong MIS weight or double counting shows.
+Scene lightOverFloor(const Object& light, float albedo) {
+    Scene s;
+    Material floor;
+    floor.albedo = Texture::constant(Vec3(albedo));
+    s.objects.push_back({"floor",
+                         {Primitive::quad({-50.0f, 0.0f, -50.0f}, {0, 0, 100.0f}, {100.0f, 0, 0})},
+                         floor,
+                         Matrix4::identity(),
+                         false});
+    s.objects.push_back(light);
+    // Looks at the origin from the side, below the light, with a narrow field of view (the 16
+    // pixels cover +-1 cm, where the form factor changes by < 1e-4).
+    s.camera.position = {0.0f, 0.5f, -1.5f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.verticalFovDegrees = 0.8f;
+    return s;
+}
+
+void expectFloorRadiance(const Scene& scene, double expected, const char* what) {
+    TraceSettings t;
+    t.width = 16;
+    t.height = 16;
+    t.samplesPerPixel = 256;
+    Image image = renderRadiance(scene, t);
+    Estimate e = pixelMean(image, 0);
+    EXPECT_LT(e.standardError, 0.003 * expected) << what;
+    // 5 standard errors plus 1e-3 relative for the pixels' spread around the origin.
+    EXPECT_NEAR(e.mean, expected, 5.0 * e.standardError + 1e-3 * expected) << what;
+}
+
+TEST(Render, QuadLightIlluminationMatchesTheFormFactor) {
+    // A 2 x 2 light at height h = 1 centred above the origin, facing down.
+    const float half = 1.0f, h = 1.0f, le = 2.0f, rho = 0.5f;
+    Material m;
+    m.albedo = Texture::constant(Vec3(0.0f));
+    m.emission = Vec3(le);
+    Object light{"light",
+                 {Primitive::quad({-half, h, -half}, {2 * half, 0, 0}, {0, 0, 2 * half})},
+                 m,
+                 Matrix4::identity(),
+                 true};
+    // Parallel rectangle seen from below one corner (Howell's catalogue, C-11), four corners.
+    auto corner = [](double x, double y) {
+        double sx = std::sqrt(1 + x * x), sy = std::sqrt(1 + y * y);
+        return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * kPi);
+    };
+    double f = 4.0 * corner(half / h, half / h);
+    expectFloorRadiance(lightOverFloor(light, rho), rho * le * f, "quad light");
+    // The same light placed by a matrix (a transformed, rotated quad) gives the same answer.
+    // Local front face +z; the rotation turns it to -y.
+    light.primitives = {Primitive::quad({-half, -half, 0}, {2 * half, 0, 0}, {0, 2 * half, 0})};
+    light.objectToWorld = translation({0.0f, h, 0.0f}) * rotationX(float(kPi / 2));
+    expectFloorRadiance(lightOverFloor(light, rho), rho * le * f, "transformed quad light");
+}
+
+TEST(Render, SphereLightIlluminationMatchesTheFormFactor) {
+    // A sphere of radius R whose centre is d above the origin: F = (R / d)^2.
+    const float radius = 0.5f, d = 1.5f, le = 3.0f, rho = 0.8f;
+    Material m;
+    m.albedo = Texture::constant(Vec3(0.0f));
+    m.emission = Vec3(le);
+    Object light{"light", {Primitive::sphere({}, radius)}, m, translation({0.0f, d, 0.0f}), true};
+    expectFloorRadiance(lightOverFloor(light, rho), rho * le * (radius / d) * (radius / d),
+                        "sphere light");
+}
+
+TEST(Render, ReferenceMeanEqualsTheMeanOfIndependentFrames) {
+    const Scene scene = buildScene("moving-objects", 3);
+    TraceSettings t;
+    t.width = 64;
+    t.height = 48;
+    t.frameIndex = 3;
+    constexpr int kFrames = 64, kReferenceSpp = 256, kBlock = 16;
+    constexpr int kBlocksX = 4, kBlocksY = 3, kBlocks = kBlocksX * kBlocksY;
+    auto blockMeans = [&](const Image& image) {
+        std::array<double, kBlocks> m{};
+        for (int y = 0; y < t.height; ++y)
+            for (int x = 0; x < t.width; ++x)
+                m[(y / kBlock) * kBlocksX + x / kBlock] +=
+                    luminance(pixelVec(image, x, y)) / double(kBlock * kBlock);
+        return m;
+    };
+    // 1-spp frames with different seeds: the mean of each 16x16 block and its standard error.
+    std::array<double, kBlocks> sum{}, sum2{};
+    for (int i = 0; i < kFrames; ++i) {
+        t.seed = 100u + unsigned(i);
+        auto m = blockMeans(renderRadiance(scene, t));
+        for (int b = 0; b < kBlocks; ++b) {
+            sum[b] += m[b];
+            sum2[b] += m[b] * m[b];
+        }
+    }
+    t.seed = 1;
+    t.stream = kReferenceStream;
+    t.samplesPerPixel = kReferenceSpp;
+    auto reference = blockMeans(renderRadiance(scene, t));
+    for (int b = 0; b < kBlocks; ++b) {
+        double mean = sum[b] / kFrames;
+        double variance = (sum2[b] - kFrames * mean * mean) / (kFrames - 1);  // of one frame
+        // The reference block is the mean of 256 frames' worth of samples.
+        double error = std::sqrt(variance / kFrames + variance / kReferenceSpp);
+        EXPECT_GT(mean, 0.01) << "block " << b;  // something lit in every block
+        EXPECT_NEAR(reference[b], mean, 5.0 * error) << "block " << b;
+    }
+}
+
+// ---- G-buffer and matrices ----
+
+void expectGBufferAgreesWithScene(const Scene& scene, const Frame& f, const std::string& what) {
+    const int w = f.width() > 0 ? f.width() : f.depth.width, h = f.depth.height;
+    ASSERT_EQ(f.objectToWorld.size(), scene.objects.size()) << what;
+    std::vector<Affine> toLocal;
+    for (const Matrix4& m : f.objectToWorld) toLocal.push_back(inverse(toAffine(m)));
+    int worstProjection = 0, background = 0, offSurface = 0;
+    float maxPixelError = 0.0f;
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            int id = f.objectId[std::size_t(y) * w + x];
+            Vec3 p = pixelVec(f.position, x, y);
+            Vec3 n = pixelVec(f.normal, x, y);
+            if (id < 0) {
+                ++background;
+                EXPECT_EQ(id, -1);
+                EXPECT_EQ(f.depth.at(x, y), 0.0f);
+                EXPECT_EQ(length(n), 0.0f);
+                EXPECT_LT(length(p - scene.camera.position), 1e-6f);
+                continue;
+            }
+            ASSERT_LT(id, int(scene.objects.size())) << what;
+            // worldToScreen maps the position to the pixel centre, w = depth = camera z.
+            float sw = 0.0f;
+            Vec3 s = project(f.worldToScreen, p, sw);
+            float error =
+                std::max(std::abs(s.x - (float(x) + 0.5f)), std::abs(s.y - (float(y) + 0.5f)));
+            if (error > maxPixelError) {
+                maxPixelError = error;
+                worstProjection = y * w + x;
+            }
+            float depth = f.depth.at(x, y);
+            EXPECT_NEAR(sw, depth, 1e-4f * depth) << what << " pixel " << x << "," << y;
+            EXPECT_NEAR(transformPoint(f.worldToCamera, p).z, depth, 1e-4f * depth) << what;
+            EXPECT_NEAR(length(n), 1.0f, 1e-4f) << what;
+            // The object's world geometry is objectToWorld * (its local geometry).
+            Vec3 local = applyAffine(toLocal[id], p);
+            float nearest = 1e9f;
+            for (const Primitive& prim : scene.objects[id].primitives)
+                nearest = std::min(nearest, distanceToSurface(prim, local));
+            if (nearest > 1e-3f) ++offSurface;
+        }
+    }
+    EXPECT_LT(maxPixelError, 1e-3f)
+        << what << ": worst at pixel " << worstProjection % w << "," << worstProjection / w;
+    EXPECT_EQ(offSurface, 0) << what << ": positions not on M * local geometry";
+    // Mostly enclosed: a small background fraction at most.
+    EXPECT_LT(background, w * h / 10) << what;
+}
+
+TEST(Render, GBufferAgreesWithTheMatricesInEveryScene) {
+    for (const SceneInfo& info : listScenes()) {
+        for (int frame : {0, 5}) {
+            Scene scene = buildScene(info.name, frame);
+            Frame f = renderGBuffer(scene, 80, 60);
+            expectGBufferAgreesWithScene(scene, f, info.name + " frame " + std::to_string(frame));
+        }
+    }
+    // The open box shows some background, and it is marked.
+    Frame f = renderGBuffer(buildScene("moving-objects", 0), 80, 60);
+    EXPECT_GT(std::count(f.objectId.begin(), f.objectId.end(), -1), 0);
+}
+
+TEST(Render, EveryPixelIsFiniteInEveryScene) {
+    for (const SceneInfo& info : listScenes()) {
+        TraceSettings t;
+        t.width = 40;
+        t.height = 30;
+        t.samplesPerPixel = 4;
+        t.frameIndex = 7;
+        Image image = renderRadiance(buildScene(info.name, 7), t);
+        double sum = 0.0;
+        for (float v : image.pixels) {
+            ASSERT_TRUE(std::isfinite(v)) << info.name;
+            ASSERT_GE(v, 0.0f) << info.name;
+            sum += v;
+        }
+        EXPECT_GT(sum / double(image.pixels.size()), 0.02) << info.name << " is too dark";
+    }
+}
+
+// Back-projection of README: Screen_{i-1} = W2S_{i-1} M_{i-1}[id] M_i[id]^-1 P_i lands on the
+// same object in frame i-1, and on the same surface point.
+TEST(Render, MovingObjectsBackProjectOntoThemselves) {
+    constexpr int kW = 128, kH = 96;
+    const int frame = 5;
+    Scene previousScene = buildScene("moving-objects", frame - 1);
+    Scene scene = buildScene("moving-objects", frame);
+    Frame previous = renderGBuffer(previousScene, kW, kH);
+    Frame current = renderGBuffer(scene, kW, kH);
+    const float focal = 0.5f * kH / std::tan(scene.camera.verticalFovDegrees * float(kPi) / 360.0f);
+    for (const char* name : {"sphere", "spinning box", "bouncing cube"}) {
+        int id = objectIndex(scene, name);
+        ASSERT_GE(id, 0);
+        Affine toLocal = inverse(toAffine(current.objectToWorld[id]));
+        Affine toPreviousWorld = toAffine(previous.objectToWorld[id]);
+        // visible: lands on screen and nothing nearer covers it in frame i-1 (else disoccluded)
+        int pixels = 0, visible = 0, sameObject = 0, samePoint = 0, samePixelSameObject = 0;
+        double motion = 0.0;
+        for (int y = 0; y < kH; ++y) {
+            for (int x = 0; x < kW; ++x) {
+                if (current.objectId[std::size_t(y) * kW + x] != id) continue;
+                ++pixels;
+                if (previous.objectId[std::size_t(y) * kW + x] == id) ++samePixelSameObject;
+                Vec3 world = toPreviousWorld.point(toLocal.point(pixelVec(current.position, x, y)));
+                float w = 0.0f;
+                Vec3 s = project(previous.worldToScreen, world, w);
+                motion += std::hypot(s.x - (float(x) + 0.5f), s.y - (float(y) + 0.5f));
+                int px = int(std::floor(s.x)), py = int(std::floor(s.y));
+                if (px < 0 || py < 0 || px >= kW || py >= kH) continue;
+                float footprint = 2.0f * w / focal;  // two pixels at that depth
+                int previousId = previous.objectId[std::size_t(py) * kW + px];
+                if (previousId != id && previous.depth.at(px, py) < w - 10.0f * footprint)
+                    continue;  // covered by a nearer object in frame i-1
+                ++visible;
+                if (previousId != id) continue;
+                ++sameObject;
+                if (length(pixelVec(previous.position, px, py) - world) < footprint) ++samePoint;
+            }
+        }
+        ASSERT_GT(pixels, 50) << name;
+        EXPECT_GT(motion / pixels, 0.2) << name << " should move";
+        EXPECT_GT(visible, pixels / 2) << name;
+        // Only the silhouette's rounding may land beside the object.
+        EXPECT_GT(sameObject, 0.97 * visible) << name;
+        EXPECT_GT(samePoint, 0.9 * sameObject) << name;
+        if (std::string(name) == "sphere") {
+            // In front of everything, moving by pixels: it finds itself everywhere, which
+            // it would not without the matrices.
+            EXPECT_GT(motion / pixels, 2.0);
+            EXPECT_GT(sameObject, 0.97 * pixels);
+            EXPECT_LT(samePixelSameObject, 0.9 * pixels);
+        }
+    }
+}
+
+TEST(Render, ScenesMoveWhatTheyAreMeantTo) {
+    auto moves = [](const std::string& scene, auto&& changed) {
+        Scene first = buildScene(scene, 0);
+        for (int i = 1; i < 16; ++i)
+            if (changed(first, buildScene(scene, i))) return true;
+        return false;
+    };
+    auto cameraMoves = [](const Scene& a, const Scene& b) {
+        return length(a.camera.position - b.camera.position) > 0.0f ||
+               length(a.camera.target - b.camera.target) > 0.0f;
+    };
+    auto objectMoves = [](const Scene& a, const Scene& b) {
+        for (std::size_t k = 0; k < a.objects.size(); ++k)
+            if (a.objects[k].objectToWorld.m != b.objects[k].objectToWorld.m) return true;
+        return false;
+    };
+    auto lightChanges = [](const Scene& a, const Scene& b) {
+        for (std::size_t k = 0; k < a.objects.size(); ++k)
+            if (length(a.objects[k].material.emission - b.objects[k].material.emission) > 0.0f)
+                return true;
+        return false;
+    };
+    EXPECT_FALSE(moves("moving-objects", cameraMoves));
+    EXPECT_TRUE(moves("moving-objects", objectMoves));
+    EXPECT_TRUE(moves("camera-pan", cameraMoves));
+    EXPECT_FALSE(moves("camera-pan", objectMoves));
+    EXPECT_TRUE(moves("thin-geometry", objectMoves));
+    EXPECT_FALSE(moves("switching-light", cameraMoves));
+    EXPECT_TRUE(moves("switching-light", lightChanges));
+    // Sphere lights are sampled as spheres: their matrices may not scale unevenly.
+    for (const SceneInfo& info : listScenes()) {
+        Scene s = buildScene(info.name, 3);
+        for (const Object& o : s.objects) {
+            if (!o.light) continue;
+            Affine a = toAffine(o.objectToWorld);
+            float sx = length(a.vector({1, 0, 0})), sy = length(a.vector({0, 1, 0})),
+                  sz = length(a.vector({0, 0, 1}));
+            EXPECT_NEAR(sx, sy, 1e-5f * sx) << info.name << " " << o.name;
+            EXPECT_NEAR(sx, sz, 1e-5f * sx) << info.name << " " << o.name;
+        }
+    }
+}
+
+TEST(Render, UnknownSceneIsAnErrorListingTheScenes) {
+    try {
+        buildScene("teapot", 0);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+        std::string message = e.what();
+        EXPECT_NE(message.find("teapot"), std::string::npos) << message;
+        for (const SceneInfo& info : listScenes())
+            EXPECT_NE(message.find(info.name), std::string::npos) << message;
+    }
+    RenderSettings bad;
+    bad.width = 0;
+    test::TempFolder dir("render-bad");
+    EXPECT_THROW(renderSequence("furnace", bad, dir.path() / "out"), Error);
+    EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
+// ---- determinism and the written folder ----
+
+TEST(Render, SameSeedSameImageOtherSeedDifferent) {
+    const Scene scene = buildScene("switching-light", 2);
+    TraceSettings t;
+    t.width = 48;
+    t.height = 36;
+    t.frameIndex = 2;
+    t.seed = 7;
+    Image a = renderRadiance(scene, t);
+    Image b = renderRadiance(scene, t);
+    EXPECT_EQ(a.pixels, b.pixels);
+    t.seed = 8;
+    Image c = renderRadiance(scene, t);
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) differ += a.pixels[i] != c.pixels[i];
+    EXPECT_GT(differ, a.pixels.size() / 2);
+    // Another frame index or the reference stream also gives other numbers.
+    t.seed = 7;
+    t.stream = kReferenceStream;
+    Image d = renderRadiance(scene, t);
+    differ = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) differ += a.pixels[i] != d.pixels[i];
+    EXPECT_GT(differ, a.pixels.size() / 2);
+}
+
+std::string fileBytes(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+TEST(Render, WrittenFolderIsASequenceWithReferenceAndSceneJson) {
+    test::TempFolder dir("render-seq");
+    RenderSettings settings;
+    settings.width = 40;
+    settings.height = 30;
+    settings.frames = 3;
+    settings.referenceSpp = 4;
+    const fs::path out = dir.path() / "seq";
+    // A frame left from an earlier, longer render must not join this sequence.
+    fs::create_directories(out);
+    writeExr(out / "beauty_5.exr", Image(40, 30, 3));
+    int calls = 0;
+    renderSequence("moving-objects", settings, out, [&](int done, int total) {
+        EXPECT_EQ(done, ++calls);
+        EXPECT_EQ(total, 3);
+    });
+    EXPECT_EQ(calls, 3);
+    EXPECT_FALSE(fs::exists(out / "beauty_5.exr"));
+
+    Sequence sequence(out);
+    ASSERT_EQ(sequence.frameCount(), 3);
+    for (int i = 0; i < 3; ++i) {
+        Frame f = sequence.readFrame(i);
+        EXPECT_EQ(f.width(), 40);
+        EXPECT_EQ(f.height(), 30);
+        ASSERT_TRUE(f.albedo.has_value());
+        EXPECT_EQ(f.objectToWorld.size(), buildScene("moving-objects", i).objects.size());
+        // The file holds what the renderer computed (the matrices survive the round trip).
+        Scene scene = buildScene("moving-objects", i);
+        expectGBufferAgreesWithScene(scene, f, "file frame " + std::to_string(i));
+        // The reference is the scene's frame i traced with the reference stream.
+        fs::path ref = out / "reference" / ("reference_" + std::to_string(i) + ".exr");
+        ASSERT_TRUE(fs::exists(ref));
+        Image reference = readExr(ref, {{"R"}, {"G"}, {"B"}});
+        TraceSettings t;
+        t.width = 40;
+        t.height = 30;
+        t.frameIndex = i;
+        t.samplesPerPixel = 4;
+        t.stream = kReferenceStream;
+        EXPECT_EQ(reference.pixels, renderRadiance(scene, t).pixels) << "frame " << i;
+    }
+    std::string json = fileBytes(out / "scene.json");
+    for (const char* key :
+         {"\"scene\": \"moving-objects\"", "\"width\": 40", "\"height\": 30", "\"frames\": 3",
+          "\"spp\": 1", "\"reference_spp\": 4", "\"seed\": 1", "\"camera\": false", "\"sphere\""})
+        EXPECT_NE(json.find(key), std::string::npos) << key << " in\n" << json;
+
+    // The same settings write the same bytes; --gbuffer-only writes no reference.
+    settings.gbufferOnly = true;
+    renderSequence("moving-objects", settings, dir.path() / "again");
+    EXPECT_EQ(fileBytes(out / "beauty_2.exr"), fileBytes(dir.path() / "again" / "beauty_2.exr"));
+    EXPECT_FALSE(fs::exists(dir.path() / "again" / "reference"));
+    EXPECT_NE(fileBytes(dir.path() / "again" / "scene.json").find("\"reference\": false"),
+              std::string::npos);
+}
+
+// ---- the command ----
+
+struct CliResult {
+    int exitCode;
+    std::string output;
+};
+
+CliResult runCli(const std::string& arguments) {
+    std::string command = std::string("'") + RTD_CLI_PATH + "' " + arguments + " 2>&1";
+    FILE* pipe = popen(command.c_str(), "r");
+    std::string output;
+    std::array<char, 4096> buffer;
+    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe))
+        output.append(buffer.data(), n);
+    int status = pclose(pipe);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+TEST(RenderCli, ListsTheScenes) {
+    CliResult r = runCli("render --list");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    for (const SceneInfo& info : listScenes()) {
+        EXPECT_NE(r.output.find(info.name), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find(info.description), std::string::npos) << r.output;
+    }
+}
+
+TEST(RenderCli, RendersASequenceAndRejectsBadArguments) {
+    test::TempFolder dir("render-cli");
+    std::string out = "'" + (dir.path() / "out").string() + "'";
+    CliResult r =
+        runCli("render thin-geometry -o " + out + " --width 24 --height 16 --frames 2 --ref-spp 2");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("Mpaths/s"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("frame 2/2"), std::string::npos) << r.output;
+    EXPECT_EQ(Sequence(dir.path() / "out").frameCount(), 2);
+    EXPECT_TRUE(fs::exists(dir.path() / "out" / "reference" / "reference_1.exr"));
+    EXPECT_TRUE(fs::exists(dir.path() / "out" / "scene.json"));
+
+    r = runCli("render teapot -o " + out);
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("teapot"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("moving-objects"), std::string::npos) << r.output;
+    for (const char* bad : {"--width 0", "--frames -1", "--spp abc", "--ref-spp 0"}) {
+        r = runCli("render furnace -o " + out + " " + bad);
+        EXPECT_NE(r.exitCode, 0) << bad;
+    }
+    r = runCli("render -o " + out);  // no scene
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("furnace"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace rtd::render

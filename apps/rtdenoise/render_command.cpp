@@ -1,11 +1,116 @@
-// `rtdenoise render`: placeholder until issue 3's implementation lands.
+// `rtdenoise render SCENE -o OUT_DIR`: renders a built-in test scene into a sequence folder with
+// its G-buffers and a converged reference (`rtdenoise render --list` names the scenes).
+#include <fmt/format.h>
+
+#include <chrono>
+#include <memory>
+#include <string>
+
 #include "commands.h"
+#include "progress.h"
+#include "render/render_sequence.h"
+#include "rtdenoise/error.h"
+
+namespace fs = std::filesystem;
 
 namespace rtd::cli {
+namespace {
+
+struct RenderOptions {
+    std::string scene;
+    fs::path output;
+    bool list = false;
+    bool quiet = false;
+    render::RenderSettings settings;
+};
+
+std::string sceneList() {
+    std::string out;
+    for (const render::SceneInfo& s : render::listScenes())
+        out += fmt::format("  {:<16} {}\n", s.name, s.description);
+    return out;
+}
+
+int runRender(const RenderOptions& options) {
+    if (options.list) {
+        fmt::print("scenes:\n{}", sceneList());
+        return 0;
+    }
+    if (options.scene.empty())
+        throw Error(ErrorCode::InvalidArgument,
+                    "render: name a SCENE (or use --list); scenes:\n" + sceneList());
+    if (options.output.empty())
+        throw Error(ErrorCode::InvalidArgument, "render: -o OUT_DIR is required");
+
+    const render::RenderSettings& s = options.settings;
+    bool known = false;
+    for (const render::SceneInfo& info : render::listScenes())
+        known = known || info.name == options.scene;
+    if (!known)
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("unknown scene '{}'; scenes:\n{}", options.scene, sceneList()));
+    if (!options.quiet)
+        fmt::print(
+            stderr, "rtdenoise: rendering {} into {}: {} frames of {}x{}, {} spp{}\n",
+            options.scene, options.output.string(), s.frames, s.width, s.height, s.spp,
+            s.gbufferOnly ? ", no reference" : fmt::format(", reference {} spp", s.referenceSpp));
+
+    Progress progress(s.frames, options.quiet);
+    auto start = std::chrono::steady_clock::now();
+    render::renderSequence(options.scene, s, options.output,
+                           [&progress](int done, int) { progress.update(done); });
+    progress.finish();
+    double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!options.quiet) {
+        double paths = render::pathCount(s);
+        fmt::print(
+            "{} frames of {}x{} in {:.2f} s ({:.2f} s/frame), {:.1f} M camera paths, "
+            "{:.2f} Mpaths/s (files included)\n",
+            s.frames, s.width, s.height, seconds, seconds / s.frames, paths * 1e-6,
+            seconds > 0.0 ? paths * 1e-6 / seconds : 0.0);
+        fmt::print("output: {}{}\n", options.output.string(),
+                   s.gbufferOnly ? "" : " (reference in reference/)");
+    }
+    return 0;
+}
+
+}  // namespace
 
 Command addRenderCommand(CLI::App& app) {
-    CLI::App* c = app.add_subcommand("render", "(not implemented yet)");
-    return {c, [] { return 1; }};
+    auto options = std::make_shared<RenderOptions>();
+    render::RenderSettings& s = options->settings;
+    CLI::App* c = app.add_subcommand(
+        "render",
+        "Render a built-in test scene into OUT_DIR: beauty_i.exr (noisy), albedo, "
+        "normal, position, depth, ID, matrix_i.mat, reference/reference_i.exr, "
+        "scene.json");
+    c->add_option("SCENE", options->scene, "Scene name (see --list)");
+    c->add_option("-o,--output", options->output, "Output folder (created if missing)");
+    c->add_flag("--list", options->list, "List the scenes with what each one tests");
+    c->add_option("--width", s.width, "Image width in pixels")
+        ->check(CLI::Range(1, 16384))
+        ->capture_default_str();
+    c->add_option("--height", s.height, "Image height in pixels")
+        ->check(CLI::Range(1, 16384))
+        ->capture_default_str();
+    c->add_option("--frames", s.frames, "Number of frames")
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
+    c->add_option("--spp", s.spp, "Samples per pixel of the noisy beauty")
+        ->check(CLI::Range(1, 1 << 20))
+        ->capture_default_str();
+    c->add_option("--ref-spp", s.referenceSpp, "Samples per pixel of the reference")
+        ->check(CLI::Range(1, 1 << 20))
+        ->capture_default_str();
+    c->add_option("--seed", s.seed, "Random seed (same seed, same files)")->capture_default_str();
+    c->add_option("--max-depth", s.maxDepth, "Surface interactions per path")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
+    c->add_flag("--gbuffer-only", s.gbufferOnly,
+                "Skip the reference: noisy beauty and G-buffers only");
+    c->add_flag("-q,--quiet", options->quiet, "No progress or summary");
+    return {c, [options] { return runRender(*options); }};
 }
 
 }  // namespace rtd::cli

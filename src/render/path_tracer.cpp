@@ -1,0 +1,670 @@
+#include "render/path_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace rtd::render {
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+// ---- random numbers ----
+
+constexpr std::uint64_t splitMix64(std::uint64_t x) {
+    x += 0x9e3779b97f4a7c15ull;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+}
+
+// PCG32 (O'Neill), one generator per camera sample.
+class Rng {
+  public:
+    Rng(std::uint64_t state, std::uint64_t sequence) : inc_((sequence << 1) | 1u) {
+        next();
+        state_ += state;
+        next();
+    }
+    std::uint32_t next() {
+        std::uint64_t old = state_;
+        state_ = old * 6364136223846793005ull + inc_;
+        auto xorShifted = std::uint32_t(((old >> 18) ^ old) >> 27);
+        auto rot = std::uint32_t(old >> 59);
+        return (xorShifted >> rot) | (xorShifted << ((32u - rot) & 31u));
+    }
+    // Uniform in [0, 1): the top 24 bits, so 1 is never returned.
+    float uniform() { return float(next() >> 8) * 0x1p-24f; }
+
+  private:
+    std::uint64_t state_ = 0;
+    std::uint64_t inc_;
+};
+
+Rng sampleRng(const TraceSettings& s, std::uint64_t pixel, std::uint64_t sample) {
+    std::uint64_t h = splitMix64((std::uint64_t(s.seed) << 32) | s.stream);
+    h = splitMix64(h ^ std::uint64_t(std::uint32_t(s.frameIndex)));
+    h = splitMix64(h ^ pixel);
+    h = splitMix64(h ^ sample);
+    return Rng(h, splitMix64(h));
+}
+
+// ---- geometry ----
+
+struct Ray {
+    Vec3 origin;
+    Vec3 direction;  // unit
+};
+
+// Moves a surface point off the surface along n (the side the next ray leaves on); the offset
+// grows with the coordinates' magnitude, above float rounding of the hit point.
+Vec3 offsetPoint(Vec3 p, Vec3 n) {
+    float scale = 1.0f + maxComponent(max(p, -p));
+    return p + n * (1e-4f * scale);
+}
+
+// A primitive with what its ray test needs precomputed (local space).
+struct TracePrimitive {
+    Primitive::Kind kind = Primitive::Kind::Box;
+    Vec3 a;                    // box min; sphere centre; quad corner
+    Vec3 b;                    // box max; quad normal cross(u, v)
+    Vec3 alphaAxis, betaAxis;  // quad: the parameters along u and v are dot(rel, axis)
+    float radius2 = 0.0f;      // sphere
+
+    explicit TracePrimitive(const Primitive& p) : kind(p.kind), a(p.p0), b(p.p1) {
+        if (kind == Primitive::Kind::Box) {
+            a = min(p.p0, p.p1);
+            b = max(p.p0, p.p1);
+        } else if (kind == Primitive::Kind::Sphere) {
+            radius2 = p.p1.x * p.p1.x;
+        } else {
+            b = cross(p.p1, p.p2);
+            Vec3 w = b / dot(b, b);
+            // dot(w, cross(rel, v)) = dot(rel, cross(v, w)), likewise for u.
+            alphaAxis = cross(p.p2, w);
+            betaAxis = cross(w, p.p1);
+        }
+    }
+};
+
+// Ray/primitive tests in the primitive's local space; `d` need not be unit (t is then the world
+// ray's parameter). Return t in (0, tMax) or kInfinity.
+float intersectBox(const TracePrimitive& box, Vec3 o, Vec3 invD, float tMax) {
+    // Branch-free slabs: a grid of bars tests many boxes per ray. The face is found from the
+    // hit point afterwards (boxFace).
+    Vec3 t0 = (box.a - o) * invD, t1 = (box.b - o) * invD;
+    float tNear = maxComponent(min(t0, t1));
+    Vec3 far = max(t0, t1);
+    float tFar = std::min(far.x, std::min(far.y, far.z));
+    float t = tNear > 0.0f ? tNear : tFar;  // from inside: the exit face
+    return tNear <= tFar && t > 0.0f && t < tMax ? t : kInfinity;
+}
+
+// The face of a box that a local point lies on: axis * 2 + (1 for the max side).
+int boxFace(const Primitive& box, Vec3 p) {
+    Vec3 lo = min(box.p0, box.p1), hi = max(box.p0, box.p1);
+    int face = 0;
+    float best = kInfinity;
+    for (int axis = 0; axis < 3; ++axis) {
+        float dLo = std::abs(p[axis] - lo[axis]), dHi = std::abs(p[axis] - hi[axis]);
+        if (dLo < best) {
+            best = dLo;
+            face = axis * 2;
+        }
+        if (dHi < best) {
+            best = dHi;
+            face = axis * 2 + 1;
+        }
+    }
+    return face;
+}
+
+float intersectSphere(const TracePrimitive& sphere, Vec3 o, Vec3 d, float tMax) {
+    Vec3 oc = o - sphere.a;
+    float a = dot(d, d);
+    float b = dot(oc, d);
+    float c = dot(oc, oc) - sphere.radius2;
+    float disc = b * b - a * c;
+    if (disc < 0.0f) return kInfinity;
+    float root = std::sqrt(disc);
+    float t = (-b - root) / a;
+    if (t > 0.0f && t < tMax) return t;
+    t = (-b + root) / a;
+    if (t > 0.0f && t < tMax) return t;
+    return kInfinity;
+}
+
+float intersectQuad(const TracePrimitive& q, Vec3 o, Vec3 d, float tMax, float& alpha,
+                    float& beta) {
+    float denom = dot(q.b, d);
+    if (denom == 0.0f) return kInfinity;
+    float t = dot(q.b, q.a - o) / denom;
+    if (!(t > 0.0f && t < tMax)) return kInfinity;
+    Vec3 rel = o + d * t - q.a;
+    alpha = dot(rel, q.alphaAxis);
+    beta = dot(rel, q.betaAxis);
+    if (alpha < 0.0f || alpha > 1.0f || beta < 0.0f || beta > 1.0f) return kInfinity;
+    return t;
+}
+
+struct CompiledObject {
+    Affine toLocal;
+    Affine toWorld;
+    bool identity = false;    // local = world: no ray transform
+    bool testBounds = true;   // false for a lone quad, whose own test is as cheap
+    Vec3 boundsLo, boundsHi;  // world space, padded
+    int firstPrimitive = 0;
+    int primitiveCount = 0;
+};
+
+// An area light sampled by next-event estimation, in world space.
+struct Light {
+    bool sphere = false;
+    Vec3 corner, edgeU, edgeV, normal;  // quad; normal on the front face
+    float area = 0.0f;
+    Vec3 centre;  // sphere
+    float radius = 0.0f;
+    Vec3 emission;
+    bool twoSided = false;
+    float probability = 0.0f;  // of being picked
+    float cdf = 0.0f;          // of this and the lights before it
+};
+
+struct Hit {
+    float t = kInfinity;
+    int object = -1;
+    int primitive = -1;
+    float alpha = 0.0f, beta = 0.0f;  // quad parameters
+};
+
+struct Surface {
+    Vec3 position;
+    Vec3 normal;  // world, unit, as modelled (outward / front face)
+    float u = 0.0f, v = 0.0f;
+};
+
+struct LightSample {
+    Vec3 direction;
+    float distance = 0.0f;
+    Vec3 emission;
+    float pdf = 0.0f;  // solid angle, selection included
+};
+
+// Solid-angle pdf of cone sampling a sphere seen from `x`; 0 from inside.
+float sphereConePdf(const Light& l, Vec3 x, float& cosMax) {
+    Vec3 d = l.centre - x;
+    float dist2 = dot(d, d);
+    float r2 = l.radius * l.radius;
+    if (dist2 <= r2) return 0.0f;
+    float sin2 = r2 / dist2;
+    cosMax = std::sqrt(std::max(0.0f, 1.0f - sin2));
+    float oneMinusCos = sin2 / (1.0f + cosMax);  // 1 - cosMax without cancellation
+    return 1.0f / (2.0f * kPi * oneMinusCos);
+}
+
+// Diffuse plus normalised Phong at one shading point; n faces wo.
+struct Bsdf {
+    Vec3 diffuse;  // (1 - specular) albedo
+    float specular = 0.0f;
+    float exponent = 1.0f;
+    Vec3 n, reflected;
+    float specularProbability = 0.0f;
+
+    Bsdf(const Material& m, Vec3 albedo, Vec3 normal, Vec3 wo)
+        : diffuse(albedo * (1.0f - m.specular)),
+          specular(m.specular),
+          exponent(m.exponent),
+          n(normal),
+          reflected(normal * (2.0f * dot(wo, normal)) - wo) {
+        float weight = specular + luminance(diffuse);
+        specularProbability = weight > 0.0f ? specular / weight : 0.0f;
+    }
+    bool black() const { return specular <= 0.0f && maxComponent(diffuse) <= 0.0f; }
+
+    float lobe(Vec3 wi) const {  // cos^n of the angle to the mirror direction, 0 behind
+        float c = dot(reflected, wi);
+        return c > 0.0f ? std::pow(c, exponent) : 0.0f;
+    }
+    Vec3 evaluate(Vec3 wi) const {
+        Vec3 f = diffuse * (1.0f / kPi);
+        if (specular > 0.0f) f += Vec3(specular * (exponent + 2.0f) / (2.0f * kPi) * lobe(wi));
+        return f;
+    }
+    float pdf(Vec3 wi) const {
+        float p = (1.0f - specularProbability) * std::max(0.0f, dot(wi, n)) / kPi;
+        if (specularProbability > 0.0f)
+            p += specularProbability * (exponent + 1.0f) / (2.0f * kPi) * lobe(wi);
+        return p;
+    }
+    // A direction from the mixture; false when it points below the surface.
+    bool sample(Rng& rng, Vec3& wi) const {
+        float choice = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        float phi = 2.0f * kPi * u2;
+        Vec3 t, b;
+        if (choice < specularProbability) {
+            float cosA = std::pow(u1, 1.0f / (exponent + 1.0f));
+            float sinA = std::sqrt(std::max(0.0f, 1.0f - cosA * cosA));
+            orthonormalBasis(reflected, t, b);
+            wi = t * (sinA * std::cos(phi)) + b * (sinA * std::sin(phi)) + reflected * cosA;
+        } else {
+            float r = std::sqrt(u1);
+            orthonormalBasis(n, t, b);
+            wi = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) +
+                 n * std::sqrt(std::max(0.0f, 1.0f - u1));
+        }
+        return dot(wi, n) > 0.0f;
+    }
+};
+
+float powerHeuristic(float a, float b) {
+    float a2 = a * a, b2 = b * b;
+    return a2 / (a2 + b2);
+}
+
+// The scene with inverse matrices, world bounds and the light list, ready for tracing.
+class CompiledScene {
+  public:
+    explicit CompiledScene(const Scene& scene) : scene_(scene) {
+        for (const Object& object : scene.objects) {
+            CompiledObject c;
+            c.toWorld = toAffine(object.objectToWorld);
+            c.toLocal = inverse(c.toWorld);
+            c.identity = object.objectToWorld.m == Matrix4::identity().m;
+            c.testBounds = !(object.primitives.size() == 1 &&
+                             object.primitives[0].kind == Primitive::Kind::Quad);
+            c.firstPrimitive = int(primitives_.size());
+            c.primitiveCount = int(object.primitives.size());
+            Vec3 lo(kInfinity), hi(-kInfinity);
+            for (const Primitive& p : object.primitives) {
+                sourcePrimitives_.push_back(p);
+                primitives_.emplace_back(p);
+                lightOf_.push_back(-1);
+                Vec3 plo, phi;
+                localBounds(p, plo, phi);
+                for (int corner = 0; corner < 8; ++corner) {
+                    Vec3 q{corner & 1 ? phi.x : plo.x, corner & 2 ? phi.y : plo.y,
+                           corner & 4 ? phi.z : plo.z};
+                    Vec3 w = c.toWorld.point(q);
+                    lo = min(lo, w);
+                    hi = max(hi, w);
+                }
+            }
+            // Padding keeps flat quads' boxes non-degenerate and covers rounding.
+            Vec3 pad(1e-4f * (1.0f + maxComponent(max(max(lo, -lo), max(hi, -hi)))));
+            c.boundsLo = lo - pad;
+            c.boundsHi = hi + pad;
+            objects_.push_back(c);
+        }
+        buildLights();
+    }
+
+    const Scene& scene() const { return scene_; }
+
+    Hit closest(const Ray& ray, float tMax = kInfinity) const {
+        Hit hit = traverse<false>(ray, tMax);
+        if (hit.object < 0) hit.t = kInfinity;
+        return hit;
+    }
+
+    bool occluded(const Ray& ray, float tMax) const {
+        return traverse<true>(ray, tMax).object >= 0;
+    }
+
+    // World position, outward normal and texture coordinates (local units) of a hit.
+    Surface surface(const Ray& ray, const Hit& hit) const {
+        const CompiledObject& c = objects_[hit.object];
+        const Primitive& prim = sourcePrimitives_[hit.primitive];
+        Surface s;
+        // The world point on the ray, so that the G-buffer projects exactly to the pixel.
+        s.position = ray.origin + ray.direction * hit.t;
+        Vec3 local = c.toLocal.point(s.position);
+        Vec3 localNormal;
+        switch (prim.kind) {
+            case Primitive::Kind::Box: {
+                int face = boxFace(prim, local);
+                int axis = face / 2;
+                float sign = face % 2 ? 1.0f : -1.0f;
+                localNormal = {axis == 0 ? sign : 0.0f, axis == 1 ? sign : 0.0f,
+                               axis == 2 ? sign : 0.0f};
+                s.u = axis == 0 ? local.z : local.x;
+                s.v = axis == 1 ? local.z : local.y;
+                break;
+            }
+            case Primitive::Kind::Sphere: {
+                float r = prim.p1.x;
+                Vec3 q = local - prim.p0;
+                localNormal = q;
+                s.u = (std::atan2(q.z, q.x) + kPi) * r;
+                s.v = std::acos(std::clamp(q.y / length(q), -1.0f, 1.0f)) * r;
+                break;
+            }
+            case Primitive::Kind::Quad:
+                localNormal = cross(prim.p1, prim.p2);
+                s.u = hit.alpha * length(prim.p1);
+                s.v = hit.beta * length(prim.p2);
+                break;
+        }
+        s.normal = normalize(c.toLocal.transposedVector(localNormal));
+        return s;
+    }
+
+    const Material& material(int object) const { return scene_.objects[object].material; }
+    int lightOf(int primitive) const { return lightOf_[primitive]; }
+    bool hasLights() const { return !lights_.empty(); }
+
+    // Solid-angle pdf with which next-event estimation from `x` picks the point that a ray
+    // from `x` along `direction` hits at distance t on light `index` (normal n there).
+    float lightPdf(int index, Vec3 x, Vec3 direction, float t, Vec3 n) const {
+        const Light& l = lights_[index];
+        if (l.sphere) {
+            float cosMax = 0.0f;
+            return l.probability * sphereConePdf(l, x, cosMax);
+        }
+        float cosLight = std::abs(dot(n, direction));
+        if (cosLight <= 0.0f) return 0.0f;
+        return l.probability * t * t / (cosLight * l.area);
+    }
+
+    bool sampleLight(Vec3 x, Rng& rng, LightSample& out) const {
+        float pick = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        std::size_t index = 0;
+        while (index + 1 < lights_.size() && pick >= lights_[index].cdf) ++index;
+        const Light& l = lights_[index];
+        if (l.sphere) {
+            float cosMax = 0.0f;
+            float pdf = sphereConePdf(l, x, cosMax);
+            if (pdf <= 0.0f) return false;
+            Vec3 toCentre = l.centre - x;
+            float dist = length(toCentre);
+            Vec3 w = toCentre / dist;
+            float cosT = 1.0f - u1 * (1.0f - cosMax);
+            float sinT = std::sqrt(std::max(0.0f, 1.0f - cosT * cosT));
+            float phi = 2.0f * kPi * u2;
+            Vec3 t, b;
+            orthonormalBasis(w, t, b);
+            out.direction = t * (sinT * std::cos(phi)) + b * (sinT * std::sin(phi)) + w * cosT;
+            // Distance to the near side of the sphere along the sampled direction.
+            float proj = dot(toCentre, out.direction);
+            float disc = std::max(0.0f, l.radius * l.radius - (dist * dist - proj * proj));
+            out.distance = proj - std::sqrt(disc);
+            out.emission = l.emission;
+            out.pdf = l.probability * pdf;
+            return out.distance > 0.0f;
+        }
+        Vec3 y = l.corner + l.edgeU * u1 + l.edgeV * u2;
+        Vec3 d = y - x;
+        float dist2 = dot(d, d);
+        if (dist2 <= 0.0f) return false;
+        out.distance = std::sqrt(dist2);
+        out.direction = d / out.distance;
+        float cosLight = -dot(l.normal, out.direction);
+        if (!l.twoSided && cosLight <= 0.0f) return false;  // the back of a one-sided light
+        cosLight = std::abs(cosLight);
+        if (cosLight <= 0.0f) return false;
+        out.emission = l.emission;
+        out.pdf = l.probability * dist2 / (cosLight * l.area);
+        return true;
+    }
+
+  private:
+    // Nearest hit before tMax, or with anyHit the first one found (shadow rays).
+    template <bool anyHit>
+    Hit traverse(const Ray& ray, float tMax) const {
+        Hit hit;
+        hit.t = tMax;
+        Vec3 invDir{1.0f / ray.direction.x, 1.0f / ray.direction.y, 1.0f / ray.direction.z};
+        for (int i = 0; i < int(objects_.size()); ++i) {
+            const CompiledObject& c = objects_[i];
+            if (c.testBounds && !hitsBounds(c, ray.origin, invDir, hit.t)) continue;
+            Vec3 o = ray.origin, d = ray.direction, invD = invDir;
+            if (!c.identity) {
+                o = c.toLocal.point(ray.origin);
+                d = c.toLocal.vector(ray.direction);
+                invD = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};
+            }
+            for (int p = c.firstPrimitive; p < c.firstPrimitive + c.primitiveCount; ++p) {
+                const TracePrimitive& prim = primitives_[p];
+                float alpha = 0.0f, beta = 0.0f, t = kInfinity;
+                switch (prim.kind) {
+                    case Primitive::Kind::Box:
+                        t = intersectBox(prim, o, invD, hit.t);
+                        break;
+                    case Primitive::Kind::Sphere:
+                        t = intersectSphere(prim, o, d, hit.t);
+                        break;
+                    case Primitive::Kind::Quad:
+                        t = intersectQuad(prim, o, d, hit.t, alpha, beta);
+                        break;
+                }
+                if (t < hit.t) {
+                    hit = {t, i, p, alpha, beta};
+                    if constexpr (anyHit) return hit;
+                }
+            }
+        }
+        return hit;
+    }
+
+    static void localBounds(const Primitive& p, Vec3& lo, Vec3& hi) {
+        switch (p.kind) {
+            case Primitive::Kind::Box:
+                lo = min(p.p0, p.p1);
+                hi = max(p.p0, p.p1);
+                return;
+            case Primitive::Kind::Sphere:
+                lo = p.p0 - Vec3(p.p1.x);
+                hi = p.p0 + Vec3(p.p1.x);
+                return;
+            case Primitive::Kind::Quad: {
+                Vec3 a = p.p0, b = p.p0 + p.p1, c = p.p0 + p.p2, d = p.p0 + p.p1 + p.p2;
+                lo = min(min(a, b), min(c, d));
+                hi = max(max(a, b), max(c, d));
+                return;
+            }
+        }
+    }
+
+    static bool hitsBounds(const CompiledObject& c, Vec3 o, Vec3 invDir, float tMax) {
+        float tNear = 0.0f, tFar = tMax;
+        for (int a = 0; a < 3; ++a) {
+            float t0 = (c.boundsLo[a] - o[a]) * invDir[a];
+            float t1 = (c.boundsHi[a] - o[a]) * invDir[a];
+            tNear = std::max(tNear, std::min(t0, t1));
+            tFar = std::min(tFar, std::max(t0, t1));
+        }
+        return tNear <= tFar;
+    }
+
+    void buildLights() {
+        double total = 0.0;
+        std::vector<double> power;
+        for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
+            const Object& object = scene_.objects[i];
+            if (!object.light || !object.material.emissive()) continue;
+            const CompiledObject& c = objects_[i];
+            for (int p = 0; p < c.primitiveCount; ++p) {
+                const Primitive& prim = sourcePrimitives_[c.firstPrimitive + p];
+                Light l;
+                l.emission = object.material.emission;
+                l.twoSided = object.material.twoSidedEmission;
+                if (prim.kind == Primitive::Kind::Quad) {
+                    l.corner = c.toWorld.point(prim.p0);
+                    l.edgeU = c.toWorld.vector(prim.p1);
+                    l.edgeV = c.toWorld.vector(prim.p2);
+                    l.area = length(cross(l.edgeU, l.edgeV));
+                    l.normal = normalize(c.toLocal.transposedVector(cross(prim.p1, prim.p2)));
+                    if (!(l.area > 0.0f)) continue;
+                } else if (prim.kind == Primitive::Kind::Sphere) {
+                    // A uniform scale is assumed (checked by the scene tests).
+                    l.sphere = true;
+                    l.centre = c.toWorld.point(prim.p0);
+                    l.radius = length(c.toWorld.vector({prim.p1.x, 0.0f, 0.0f}));
+                    l.area = 4.0f * kPi * l.radius * l.radius;
+                } else {
+                    continue;  // boxes are found by BSDF sampling only
+                }
+                double watts = double(luminance(l.emission)) * l.area * (l.twoSided ? 2.0 : 1.0);
+                if (!(watts > 0.0)) continue;
+                lightOf_[c.firstPrimitive + p] = int(lights_.size());
+                lights_.push_back(l);
+                power.push_back(watts);
+                total += watts;
+            }
+        }
+        double running = 0.0;
+        for (std::size_t i = 0; i < lights_.size(); ++i) {
+            running += power[i];
+            lights_[i].probability = float(power[i] / total);
+            lights_[i].cdf = float(running / total);
+        }
+    }
+
+    const Scene& scene_;
+    std::vector<CompiledObject> objects_;
+    std::vector<Primitive> sourcePrimitives_;
+    std::vector<TracePrimitive> primitives_;
+    std::vector<int> lightOf_;  // per primitive: its light, or -1
+    std::vector<Light> lights_;
+};
+
+Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng) {
+    Vec3 result(0.0f), throughput(1.0f);
+    float previousPdf = 0.0f;  // solid-angle pdf of the BSDF sample that made `ray`
+    for (int depth = 0; depth < maxDepth; ++depth) {
+        Hit hit = scene.closest(ray);
+        if (hit.object < 0) {
+            result += throughput * scene.scene().background;
+            break;
+        }
+        Surface s = scene.surface(ray, hit);
+        const Material& m = scene.material(hit.object);
+        bool front = dot(s.normal, ray.direction) < 0.0f;
+        Vec3 n = front ? s.normal : -s.normal;
+
+        if (m.emissive() && (front || m.twoSidedEmission)) {
+            float weight = 1.0f;
+            int light = scene.lightOf(hit.primitive);
+            // Lights that next-event estimation also reaches share the path by MIS; camera
+            // rays and unsampled emitters count in full.
+            if (depth > 0 && light >= 0)
+                weight = powerHeuristic(
+                    previousPdf, scene.lightPdf(light, ray.origin, ray.direction, hit.t, s.normal));
+            result += throughput * m.emission * weight;
+        }
+        if (depth + 1 >= maxDepth) break;  // the next vertex would be past the limit
+
+        Vec3 wo = -ray.direction;
+        Bsdf bsdf(m, m.albedo.evaluate(s.u, s.v), n, wo);
+        if (bsdf.black()) break;
+        Vec3 x = offsetPoint(s.position, n);
+
+        if (scene.hasLights()) {
+            LightSample ls;
+            if (scene.sampleLight(x, rng, ls)) {
+                float cosSurface = dot(ls.direction, n);
+                if (cosSurface > 0.0f &&
+                    !scene.occluded({x, ls.direction}, ls.distance * 0.9999f)) {
+                    float weight = powerHeuristic(ls.pdf, bsdf.pdf(ls.direction));
+                    result += throughput * bsdf.evaluate(ls.direction) * ls.emission *
+                              (cosSurface * weight / ls.pdf);
+                }
+            }
+        }
+
+        Vec3 wi;
+        if (!bsdf.sample(rng, wi)) break;
+        float pdf = bsdf.pdf(wi);
+        if (!(pdf > 0.0f)) break;
+        throughput *= bsdf.evaluate(wi) * (dot(wi, n) / pdf);
+        previousPdf = pdf;
+
+        if (depth >= 2) {  // Russian roulette; unbiased since survivors are divided by q
+            float q = std::min(0.95f, maxComponent(throughput));
+            if (!(rng.uniform() < q)) break;
+            throughput *= 1.0f / q;
+        }
+        ray = {x, wi};
+    }
+    return result;
+}
+
+}  // namespace
+
+Image renderRadiance(const Scene& scene, const TraceSettings& settings) {
+    CompiledScene compiled(scene);
+    const int w = settings.width, h = settings.height;
+    CameraFrame camera = cameraFrame(scene.camera, w, h);
+    Image image(w, h, 3);
+    const int spp = std::max(1, settings.samplesPerPixel);
+#pragma omp parallel for schedule(dynamic)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(w) + std::uint64_t(x);
+            double sum[3] = {0.0, 0.0, 0.0};
+            for (int s = 0; s < spp; ++s) {
+                Rng rng = sampleRng(settings, pixel, std::uint64_t(s));
+                float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
+                Ray ray{camera.position, camera.direction(px, py)};
+                Vec3 l = radiance(compiled, ray, settings.maxDepth, rng);
+                if (!isFinite(l)) continue;  // never write NaN/Inf; the sample counts as 0
+                sum[0] += l.x;
+                sum[1] += l.y;
+                sum[2] += l.z;
+            }
+            for (int c = 0; c < 3; ++c) image.at(x, y, c) = float(sum[c] / spp);
+        }
+    }
+    return image;
+}
+
+Frame renderGBuffer(const Scene& scene, int width, int height) {
+    CompiledScene compiled(scene);
+    CameraFrame camera = cameraFrame(scene.camera, width, height);
+    Frame f;
+    f.normal = Image(width, height, 3);
+    f.position = Image(width, height, 3);
+    f.depth = Image(width, height, 1);
+    f.albedo = Image(width, height, 3);
+    f.objectId.assign(std::size_t(width) * height, -1);
+#pragma omp parallel for schedule(dynamic)
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            Ray ray{camera.position, camera.direction(float(x) + 0.5f, float(y) + 0.5f)};
+            Hit hit = compiled.closest(ray);
+            Vec3 p = camera.position, n{}, albedo{};
+            float depth = 0.0f;
+            int id = -1;
+            if (hit.object >= 0) {
+                Surface s = compiled.surface(ray, hit);
+                const Material& m = compiled.material(hit.object);
+                p = s.position;
+                n = dot(s.normal, ray.direction) < 0.0f ? s.normal : -s.normal;
+                depth = dot(p - camera.position, camera.forward);
+                albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular) + Vec3(m.specular);
+                id = hit.object;
+            }
+            for (int c = 0; c < 3; ++c) {
+                f.position.at(x, y, c) = p[c];
+                f.normal.at(x, y, c) = n[c];
+                f.albedo->at(x, y, c) = albedo[c];
+            }
+            f.depth.at(x, y) = depth;
+            f.objectId[std::size_t(y) * width + x] = id;
+        }
+    }
+    for (const Object& object : scene.objects) f.objectToWorld.push_back(object.objectToWorld);
+    f.worldToCamera = worldToCamera(scene.camera);
+    f.worldToScreen = worldToScreen(scene.camera, width, height);
+    return f;
+}
+
+Frame renderFrame(const Scene& scene, const TraceSettings& settings) {
+    Frame f = renderGBuffer(scene, settings.width, settings.height);
+    f.beauty = renderRadiance(scene, settings);
+    return f;
+}
+
+}  // namespace rtd::render

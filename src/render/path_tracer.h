@@ -1,0 +1,44 @@
+// CPU path tracer over the analytic scenes of scene.h: next-event estimation towards area lights
+// combined with BSDF sampling by multiple importance sampling (power heuristic), Russian
+// roulette, OpenMP over rows. Random numbers come from a hash of (seed, stream, frame, pixel,
+// sample), so a frame is the same whatever the thread count.
+#pragma once
+
+#include <cstdint>
+
+#include "render/scene.h"
+#include "rtdenoise/image.h"
+
+namespace rtd::render {
+
+struct TraceSettings {
+    int width = 320;
+    int height = 240;
+    int samplesPerPixel = 1;
+    // Surface interactions per path: emission is counted at the 1st..maxDepth-th hit, so a
+    // white furnace of albedo a and emission Le gives Le (1 - a^maxDepth) / (1 - a).
+    int maxDepth = 8;
+    std::uint32_t seed = 1;
+    int frameIndex = 0;
+    std::uint32_t stream = 0;  // independent random numbers per stream (0 beauty, 1 reference)
+};
+
+// Stream of the noisy beauty and of the reference: the reference never reuses the beauty's
+// random numbers.
+constexpr std::uint32_t kBeautyStream = 0;
+constexpr std::uint32_t kReferenceStream = 1;
+
+// Mean radiance of `samplesPerPixel` camera paths per pixel, each through a uniformly jittered
+// point of the pixel; 3 channels. Nothing is clamped; a non-finite sample counts as 0.
+Image renderRadiance(const Scene& scene, const TraceSettings& settings);
+
+// G-buffer from the primary ray through each pixel centre: normal (world, unit, facing the
+// camera), position (the camera position on background), depth (camera z, 0 on background),
+// object ID (-1 on background), albedo (diffuse texture times (1 - specular) plus specular, 0
+// on background) and the matrices. The beauty is left empty.
+Frame renderGBuffer(const Scene& scene, int width, int height);
+
+// Both of the above: one frame of a sequence.
+Frame renderFrame(const Scene& scene, const TraceSettings& settings);
+
+}  // namespace rtd::render
