@@ -50,6 +50,7 @@ void checkFrame(const Frame& f) {
     checkImage(f.normal, w, h, 3, "normal");
     checkImage(f.position, w, h, 3, "position");
     checkImage(f.depth, w, h, 1, "depth");
+    if (f.albedo) checkImage(*f.albedo, w, h, 3, "albedo");
     if (f.objectId.size() != std::size_t(w) * h)
         throw Error(ErrorCode::InvalidInput,
                     fmt::format("frame: objectId has {} values, expected {}x{}",
@@ -281,6 +282,28 @@ struct Denoiser::Impl {
                 });
     }
 
+    // Where an svgf stage keeps illumination + variance (4 planes).
+    enum class Slot { Variance, A, B, Feedback };
+    Slot svgfResult = Slot::Variance;  // where the last iteration leaves its output
+    DeviceBuffer<float>& slot(Slot s) {
+        switch (s) {
+            case Slot::Variance: return varianceOut;
+            case Slot::A: return filterA;
+            case Slot::B: return filterB;
+            case Slot::Feedback: return feedback[current];
+        }
+        return filterA;
+    }
+    static std::string slotName(Slot s) {
+        switch (s) {
+            case Slot::Variance: return "illumination+variance";
+            case Slot::A: return "filterA";
+            case Slot::B: return "filterB";
+            case Slot::Feedback: return "feedback";
+        }
+        return "?";
+    }
+
     void addSvgfPasses(DeviceBuffer<float>* in, const std::string& inName) {
         const SvgfSettings& sv = settings.svgf;
         SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance,
@@ -294,7 +317,7 @@ struct Denoiser::Impl {
                 {"illumination", "moments", "historyLength", "validity"}, [this, in, sv] {
                     launch(SvgfTemporalKernel{
                         gbuffer(), previousGeometry(), objects.data(), planeSet(derivatives),
-                        historyTest(), planes(*in), planes(albedo), sv.albedoEpsilon,
+                        historyTest(), planes(*in),
                         planeSet(feedback[previous()]), planeSet(moments[previous()]),
                         historyLength[previous()].data(), planes(illumination),
                         planeSet(moments[current]), historyLength[current].data(),
@@ -329,31 +352,7 @@ struct Denoiser::Impl {
                     });
             src = dst;
         }
-        addPass("svgf-modulate", {slotName(src), "albedo"}, {"output"}, [this, sv, src] {
-            launch(SvgfModulateKernel{gbuffer(), planes(slot(src)), planes(albedo), planes(noisy),
-                                      planes(filtered), sv.albedoEpsilon});
-        });
-    }
-
-    // Where an svgf stage keeps illumination + variance (4 planes).
-    enum class Slot { Variance, A, B, Feedback };
-    DeviceBuffer<float>& slot(Slot s) {
-        switch (s) {
-            case Slot::Variance: return varianceOut;
-            case Slot::A: return filterA;
-            case Slot::B: return filterB;
-            case Slot::Feedback: return feedback[current];
-        }
-        return filterA;
-    }
-    static std::string slotName(Slot s) {
-        switch (s) {
-            case Slot::Variance: return "illumination+variance";
-            case Slot::A: return "filterA";
-            case Slot::B: return "filterB";
-            case Slot::Feedback: return "feedback";
-        }
-        return "?";
+        svgfResult = src;
     }
 
     void buildPipeline() {
@@ -389,9 +388,18 @@ struct Denoiser::Impl {
                 break;
             case Method::Svgf:
                 addSvgfPasses(in, inName);
-                spatialOutput = &filtered;
                 break;
         }
+        // Multiply the albedo back (a copy without one) into `filtered`, the output.
+        std::string resultName = settings.method == Method::Temporal ? "history"
+                                 : settings.method == Method::Svgf   ? slotName(svgfResult)
+                                                                     : "filtered";
+        addPass("modulate", {resultName, "albedo"}, {"output"}, [this] {
+            Planes3 result = settings.method == Method::Temporal ? planes(history[current])
+                             : settings.method == Method::Svgf   ? planes(slot(svgfResult))
+                                                                 : planes(filtered);
+            launch(ModulateKernel{layout, result, planes(albedo), planes(filtered)});
+        });
         for (const Pass& p : pipeline) passInfos.push_back(p.info);
         stats.passMilliseconds.assign(pipeline.size(), 0.0);
     }
@@ -399,7 +407,8 @@ struct Denoiser::Impl {
     void ingest() {
         launch(IngestKernel{layout, inBeauty.device, inNormal.device, inPosition.device,
                             inDepth.device, reinterpret_cast<const std::int32_t*>(inId.device),
-                            frameHasAlbedo ? inAlbedo.device : nullptr, planes(noisy),
+                            frameHasAlbedo ? inAlbedo.device : nullptr, settings.albedo.epsilon,
+                planes(noisy),
                             planes(albedo), planes(normal[current]), planes(position),
                             depth[current].data(), objectId[current].data(), nonFinite.data()});
     }
@@ -429,7 +438,7 @@ struct Denoiser::Impl {
     }
 
     void bindInputs(const Frame& f) {
-        frameHasAlbedo = f.albedo.has_value();
+        frameHasAlbedo = f.albedo.has_value() && settings.albedo.demodulate;
         struct Source {
             InputBuffer* in;
             const void* host;
@@ -477,10 +486,8 @@ struct Denoiser::Impl {
         start = Clock::now();
         if (output.width != width() || output.height != height() || output.channels != 3)
             output = Image(width(), height(), 3);
-        DeviceBuffer<float>& result =
-            settings.method == Method::Temporal ? history[current] : *spatialOutput;
         float* packTarget = device->sharesHostMemory() ? output.pixels.data() : stageOutput.data();
-        launch(PackKernel{layout, planes(result), packTarget});
+        launch(PackKernel{layout, planes(filtered), packTarget});
         if (!device->sharesHostMemory())
             device->copyToHost(output.pixels.data(), stageOutput.data(),
                                3 * pixels() * sizeof(float));

@@ -43,7 +43,7 @@ void validate(const DenoiserSettings& s) {
             "svgf feedback iteration must be in [0, iterations - 1]");
     require(s.svgf.maxHistory >= 1 && s.svgf.maxHistory <= 1000,
             "svgf max history must be in [1, 1000]");
-    require(positive(s.svgf.albedoEpsilon), "svgf albedo epsilon must be > 0");
+    require(positive(s.albedo.epsilon), "albedo epsilon must be > 0");
 }
 
 const char* toString(Method method) {

@@ -344,7 +344,8 @@ TEST(Denoiser, PassesAreListedWithTheirBuffers) {
     for (const PassInfo& p : temporal.passes()) names.push_back(p.name);
     std::vector<std::string> expected{"ingest",   "outlier-rows", "outlier",   "atrous0",
                                       "atrous1",  "atrous2",      "atrous3",   "atrous4",
-                                      "geometry", "reproject",    "clamp-rows", "accumulate"};
+                                      "geometry", "reproject",    "clamp-rows", "accumulate",
+                                      "modulate"};
     EXPECT_EQ(names, expected);
     EXPECT_EQ(temporal.passes()[9].outputs, (std::vector<std::string>{"reprojected", "validity"}));
 }

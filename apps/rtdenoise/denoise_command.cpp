@@ -269,8 +269,11 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
         ->capture_default_str();
     c.add_option("--svgf-max-history", s.svgf.maxHistory, "[1,1000] svgf history length cap")
         ->capture_default_str();
-    c.add_option("--albedo-epsilon", s.svgf.albedoEpsilon,
-                 "[>0] svgf: illumination = colour / max(albedo, epsilon)")
+    c.add_flag("--albedo,!--no-albedo", s.albedo.demodulate,
+               "Where albedo_<i>.exr exists, filter colour / albedo and multiply it back (on by "
+               "default)");
+    c.add_option("--albedo-epsilon", s.albedo.epsilon,
+                 "[>0] illumination = colour / max(albedo, epsilon)")
         ->capture_default_str();
     c.add_flag("--outlier,!--no-outlier", s.outlier.enabled,
                "Firefly removal before filtering (on by default)");

@@ -59,7 +59,14 @@ struct SvgfSettings {
     int feedbackIteration = 0;    // [0, iterations-1] its output becomes next frame's colour
                                   // history (0: the first iteration, the paper's choice)
     int maxHistory = 32;          // [1, 1000] history length cap (frames)
-    float albedoEpsilon = 1e-3f;  // [>0] illumination = colour / max(albedo, epsilon)
+};
+
+// Albedo demodulation (every method): where a frame has an albedo, filter the illumination
+// colour / max(albedo, epsilon) and multiply the albedo back at the end, so that texture detail
+// is not blurred. Frames without an albedo are filtered as they are.
+struct AlbedoSettings {
+    bool demodulate = true;  // use the frame's albedo when it has one
+    float epsilon = 1e-3f;   // [>0] floor of the albedo divided by (black texels)
 };
 
 struct TemporalSettings {
@@ -79,6 +86,7 @@ struct DenoiserSettings {
     TemporalSettings temporal;
     HistorySettings history;
     SvgfSettings svgf;
+    AlbedoSettings albedo;
 };
 
 // Throws rtd::Error(InvalidArgument) naming the first setting out of its range.

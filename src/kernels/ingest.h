@@ -1,5 +1,7 @@
 // Frame ingest: the renderer's interleaved RGB buffers into the denoiser's padded planar ones;
-// NaN/Inf in the radiance become 0 and are flagged so the host can count them.
+// NaN/Inf in the radiance become 0 and are flagged so the host can count them. With an albedo,
+// object pixels are demodulated here (illumination = colour / max(albedo, epsilon)); the
+// ModulateKernel multiplies the same factor back at the end.
 #pragma once
 
 #include "kernels/views.h"
@@ -14,6 +16,7 @@ struct IngestKernel {
     const float* depthIn;      // 1 float per pixel
     const std::int32_t* idIn;  // 1 int per pixel
     const float* albedoRgb;    // interleaved, or null: albedo 1 (no demodulation)
+    float albedoEpsilon;
     Planes3 beauty, albedo, normal, position;
     float* depth;
     std::int32_t* objectId;
@@ -30,15 +33,17 @@ struct IngestKernel {
             bad += finite ? 0 : 1;
             c[k] = finite ? v : 0.0f;
         }
-        beauty.store(i, make3(c[0], c[1], c[2]));
-        // A non-finite albedo cannot be trusted to divide by: treat it as 1.
+        // Background and non-finite albedo: factor 1 (nothing to demodulate, or untrustworthy).
         Float3 a = make3(1.0f, 1.0f, 1.0f);
-        if (albedoRgb) {
+        if (albedoRgb && idIn[s] >= 0) {
             float r = albedoRgb[3 * s], gr = albedoRgb[3 * s + 1], b = albedoRgb[3 * s + 2];
             bool finite = isFinite(r) && isFinite(gr) && isFinite(b);
-            a = finite ? make3(r, gr, b) : a;
+            a = finite ? make3(maxf(r, albedoEpsilon), maxf(gr, albedoEpsilon),
+                               maxf(b, albedoEpsilon))
+                       : a;
         }
         albedo.store(i, a);
+        beauty.store(i, make3(c[0] / a.x, c[1] / a.y, c[2] / a.z));
         normal.store(i, make3(normalRgb[3 * s], normalRgb[3 * s + 1], normalRgb[3 * s + 2]));
         position.store(i,
                        make3(positionRgb[3 * s], positionRgb[3 * s + 1], positionRgb[3 * s + 2]));

@@ -6,6 +6,7 @@
 #include "kernels/atrous.h"
 #include "kernels/ingest.h"
 #include "kernels/jbf.h"
+#include "kernels/modulate.h"
 #include "kernels/outlier.h"
 #include "kernels/reproject.h"
 #include "kernels/svgf.h"
@@ -25,4 +26,4 @@
     X(SvgfTemporalKernel)      \
     X(SvgfVarianceKernel)      \
     X(SvgfAtrousKernel)        \
-    X(SvgfModulateKernel)
+    X(ModulateKernel)

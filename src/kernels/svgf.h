@@ -1,8 +1,9 @@
 // Spatiotemporal variance-guided filtering (Schied et al., HPG 2017; reference: Falcor's
-// SVGFPass). Passes: temporal (demodulate by albedo, reproject, accumulate illumination and the
+// SVGFPass). Albedo demodulation happens in the ingest and modulation in ModulateKernel, for
+// every method. Passes: temporal (reproject, accumulate illumination and the
 // first two luminance moments with a per-pixel history length), variance (temporal from the
 // moments, or a 7x7 edge-aware spatial estimate where the history is short), A-Trous iterations
-// guided by the variance, modulate (multiply the albedo back).
+// guided by the variance.
 #pragma once
 
 #include "kernels/reproject.h"
@@ -45,9 +46,7 @@ struct SvgfTemporalKernel {
     const ObjectReprojection* objects;
     PlaneSet derivatives;
     HistoryTest test;
-    Planes3 radiance;  // noisy input (after firefly removal)
-    Planes3 albedo;    // 1 where the frame has no albedo: no demodulation
-    float albedoEpsilon;
+    Planes3 radiance;  // noisy input, demodulated by the ingest, after firefly removal
     PlaneSet previousIllumination;  // rgb (+ variance, unused here): last frame's feedback
     PlaneSet previousMoments;       // 2 planes
     const float* previousLength;
@@ -70,9 +69,7 @@ struct SvgfTemporalKernel {
             length[i] = 0.0f;
             return;
         }
-        Float3 a = albedo.load(i);
-        Float3 current = make3(c.x / maxf(a.x, albedoEpsilon), c.y / maxf(a.y, albedoEpsilon),
-                               c.z / maxf(a.z, albedoEpsilon));
+        Float3 current = c;
         float l = luminance(current);
         if (taps.code != kReprojectionValid) {
             illumination.store(i, current);
@@ -210,27 +207,6 @@ struct SvgfAtrousKernel {
         float inv = 1.0f / maxf(sumW, 1e-20f);  // the centre alone gives (3/8)^2
         out.rgb().store(i, sum * inv);
         out.at(3, i) = sumVar * inv * inv;
-    }
-};
-
-// Final modulation: illumination times the albedo it was divided by; background passes through.
-struct SvgfModulateKernel {
-    GBufferView g;
-    Planes3 illumination;
-    Planes3 albedo;
-    Planes3 radiance;  // for background pixels
-    Planes3 out;
-    float albedoEpsilon;
-
-    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        int i = g.layout.index(x, y);
-        if (g.objectId[i] < 0) {
-            out.store(i, radiance.load(i));
-            return;
-        }
-        Float3 a = albedo.load(i), c = illumination.load(i);
-        out.store(i, make3(c.x * maxf(a.x, albedoEpsilon), c.y * maxf(a.y, albedoEpsilon),
-                           c.z * maxf(a.z, albedoEpsilon)));
     }
 };
 
