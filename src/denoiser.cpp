@@ -311,13 +311,19 @@ struct Denoiser::Impl {
         constexpr int kVarianceRadius = 3;  // 7x7 spatial estimate
         padding = std::max({padding, kVarianceRadius, 2 << (sv.iterations - 1)});
         addGeometryPass();
+        if (sv.historyClampK > 0.0f) {
+            padding = std::max(padding, kVarianceRadius);
+            addPass("svgf-clamp-rows", {inName, "objectId"}, {"windowSums"}, [this, in] {
+                launch(ColorRowSumsKernel{gbuffer(), planes(*in), sums(), kVarianceRadius});
+            });
+        }
         addPass("svgf-temporal",
-                {inName, "albedo", "position", "normal", "depth", "objectId", "derivatives",
+                {inName, "windowSums", "position", "normal", "depth", "objectId", "derivatives",
                  "previous geometry", "feedback", "moments", "historyLength", "matrices"},
                 {"illumination", "moments", "historyLength", "validity"}, [this, in, sv] {
                     launch(SvgfTemporalKernel{
                         gbuffer(), previousGeometry(), objects.data(), planeSet(derivatives),
-                        historyTest(), planes(*in),
+                        historyTest(), planes(*in), sums(), kVarianceRadius, sv.historyClampK,
                         planeSet(feedback[previous()]), planeSet(moments[previous()]),
                         historyLength[previous()].data(), planes(illumination),
                         planeSet(moments[current]), historyLength[current].data(),

@@ -41,6 +41,8 @@ void validate(const DenoiserSettings& s) {
             "svgf iterations must be in [1, 10]");
     require(s.svgf.feedbackIteration >= 0 && s.svgf.feedbackIteration < s.svgf.iterations,
             "svgf feedback iteration must be in [0, iterations - 1]");
+    require(std::isfinite(s.svgf.historyClampK) && s.svgf.historyClampK >= 0.0f,
+            "svgf history clamp k must be >= 0");
     require(s.svgf.maxHistory >= 1 && s.svgf.maxHistory <= 1000,
             "svgf max history must be in [1, 1000]");
     require(positive(s.albedo.epsilon), "albedo epsilon must be > 0");

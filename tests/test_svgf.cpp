@@ -96,7 +96,8 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
         PreviousGeometry previous{h.ids.data(), h.depth.data(), h.planes(h.normal)};
         h.device->launch(
             SvgfTemporalKernel{h.gbuffer(), previous, &identity, h.planeSet(derivatives),
-                               HistoryTest{1, 10.0f, 16.0f}, h.planes(h.a),
+                               HistoryTest{1, 10.0f, 16.0f}, h.planes(h.a), h.sumPlanes(), 3,
+                               0.0f,
                                h.planeSet(illumination[prev]), h.planeSet(moments[prev]),
                                length[prev].data(), h.planes(illumination[cur]),
                                h.planeSet(moments[cur]), length[cur].data(), h.validity.data(),

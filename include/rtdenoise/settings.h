@@ -59,6 +59,9 @@ struct SvgfSettings {
     int feedbackIteration = 0;    // [0, iterations-1] its output becomes next frame's colour
                                   // history (0: the first iteration, the paper's choice)
     int maxHistory = 32;          // [1, 1000] history length cap (frames)
+    float historyClampK = 1.5f;   // [>=0] anti-lag: colour history clamped to mu +- k sigma of
+                                  // the current noisy 7x7 neighbourhood (0: off, the paper;
+                                  // 1.5 chosen on the rendered scenes, see README)
 };
 
 // Albedo demodulation (every method): where a frame has an albedo, filter the illumination
@@ -77,7 +80,7 @@ struct TemporalSettings {
 };
 
 struct DenoiserSettings {
-    Method method = Method::Temporal;
+    Method method = Method::Svgf;  // the best on every rendered scene (README quality table)
     DeviceType device = DeviceType::Auto;
     EdgeStoppingSettings edges;
     JbfSettings jbf;

@@ -8,6 +8,7 @@
 
 #include "kernels/reproject.h"
 #include "kernels/views.h"
+#include "kernels/window_sums.h"
 
 namespace rtd {
 
@@ -47,6 +48,9 @@ struct SvgfTemporalKernel {
     PlaneSet derivatives;
     HistoryTest test;
     Planes3 radiance;  // noisy input, demodulated by the ingest, after firefly removal
+    PlaneSet rowSums;  // ColorRowSumsKernel over `radiance`: the anti-lag clamp's window
+    int clampRadius;
+    float clampK;      // 0: no clamp (the paper); else history clamped to mu +- k sigma
     PlaneSet previousIllumination;  // rgb (+ variance, unused here): last frame's feedback
     PlaneSet previousMoments;       // 2 planes
     const float* previousLength;
@@ -80,6 +84,7 @@ struct SvgfTemporalKernel {
         }
         Float3 history;
         float m1 = 0.0f, m2 = 0.0f, h = 0.0f;
+        const Layout& L = g.layout;
         Planes3 previousRgb = previousIllumination.rgb();
         for (int t = 0; t < taps.count; ++t) {
             int j = taps.index[t];
@@ -88,6 +93,30 @@ struct SvgfTemporalKernel {
             m1 += previousMoments.at(0, j) * w;
             m2 += previousMoments.at(1, j) * w;
             h += previousLength[j] * w;
+        }
+        if (clampK > 0.0f) {
+            // Anti-lag: history outside what the current frame's neighbourhood allows (a light
+            // switched, a shadow moved) is pulled into mu +- k sigma; ordinary history, inside
+            // the wide 1-spp spread, is untouched.
+            float inv = 1.0f / maxf(columnSum(rowSums, 0, i, L.pitch, clampRadius), 1.0f);
+            float lo[3], hi[3];
+            for (int ch = 0; ch < 3; ++ch) {
+                float mean = columnSum(rowSums, 1 + ch, i, L.pitch, clampRadius) * inv;
+                float meanSquare = columnSum(rowSums, 4 + ch, i, L.pitch, clampRadius) * inv;
+                float sigma = std::sqrt(maxf(meanSquare - mean * mean, 0.0f));
+                lo[ch] = mean - clampK * sigma;
+                hi[ch] = mean + clampK * sigma;
+            }
+            Float3 clamped =
+                clamp3(history, make3(lo[0], lo[1], lo[2]), make3(hi[0], hi[1], hi[2]));
+            // The further the clamp had to move the history, the less of it is trusted: the
+            // history length shrinks by the relative luminance change, so alpha = 1/h rises
+            // and the new lighting is taken up within a few frames.
+            float before = luminance(history), after = luminance(clamped);
+            float change = (before > after ? before - after : after - before) /
+                           maxf(maxf(before, after), 1e-4f);
+            h = maxf(h * (1.0f - change), 0.0f);
+            history = clamped;
         }
         h = minf(h + 1.0f, maxHistory);
         // Equal weights for the first frames of a history, then the exponential average.
