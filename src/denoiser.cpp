@@ -72,12 +72,11 @@ struct Pass {
     std::function<void()> run;
 };
 
-// A frame input: the caller's host buffer, and where the device reads it from.
+// A frame input as the device reads it: the caller's buffer itself where the device shares host
+// memory, else a copy in `staging`.
 struct InputBuffer {
-    const void* host = nullptr;
-    std::size_t bytes = 0;
     DeviceBuffer<float> staging;  // only for devices that cannot read host memory
-    const float* device = nullptr;
+    const void* device = nullptr;
 };
 
 struct Denoiser::Impl {
@@ -113,11 +112,7 @@ struct Denoiser::Impl {
     Matrix4 previousWorldToScreen;
 
     // Per frame: the caller's buffers as the device sees them.
-    const Frame* frame = nullptr;
     InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo;
-
-    // Where the spatial filter's result lies (fixed when the pipeline is built).
-    DeviceBuffer<float>* spatialOutput = nullptr;
 
     explicit Impl(const DenoiserSettings& s) : settings(s) {
         validate(settings);
@@ -203,7 +198,7 @@ struct Denoiser::Impl {
             for (auto* in : {&inBeauty, &inNormal, &inPosition, &inAlbedo})
                 in->staging = DeviceBuffer<float>(d, 3 * n);
             inDepth.staging = DeviceBuffer<float>(d, n);
-            inId.staging = DeviceBuffer<float>(d, n);  // int32 bits, same size
+            inId.staging = DeviceBuffer<float>(d, n);  // holds int32 IDs: same size
             stageOutput = DeviceBuffer<float>(d, 3 * n);
         }
         hasHistory = false;
@@ -214,8 +209,8 @@ struct Denoiser::Impl {
         pipeline.push_back({{std::move(name), std::move(inputs), std::move(outputs)}, std::move(run)});
     }
 
-    // Adds the spatial filter reading `in`; returns the buffer holding its result.
-    DeviceBuffer<float>* addSpatialPasses(SpatialFilter filter, DeviceBuffer<float>* in,
+    // Adds the spatial filter reading `in`; its result lands in `filtered`.
+    void addSpatialPasses(SpatialFilter filter, DeviceBuffer<float>* in,
                                           const std::string& inName) {
         const EdgeStoppingTerms edges = edgeTerms(settings.edges);
         if (filter == SpatialFilter::Jbf) {
@@ -227,7 +222,7 @@ struct Denoiser::Impl {
                         launch(JbfKernel{gbuffer(), planes(*in), planes(filtered), radius,
                                          coordScale, edges});
                     });
-            return &filtered;
+            return;
         }
         // A-Trous levels ping-pong between `filtered` and `scratch`, ending in `filtered`.
         int levels = settings.atrous.passes;
@@ -247,7 +242,6 @@ struct Denoiser::Impl {
             src = dst;
             srcName = dstName;
         }
-        return &filtered;
     }
 
     void addGeometryPass() {
@@ -272,11 +266,11 @@ struct Denoiser::Impl {
         float alpha = settings.temporal.alpha, k = settings.temporal.clampK;
         int radius = settings.temporal.clampRadius;
         addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
-            launch(ColorRowSumsKernel{gbuffer(), planes(*spatialOutput), sums(), radius});
+            launch(ColorRowSumsKernel{gbuffer(), planes(filtered), sums(), radius});
         });
         addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity"},
                 {"output", "history"}, [this, alpha, k, radius] {
-                    launch(AccumulateKernel{gbuffer(), sums(), planes(*spatialOutput),
+                    launch(AccumulateKernel{gbuffer(), sums(), planes(filtered),
                                             planes(reprojected), validity.data(),
                                             planes(history[current]), alpha, k, radius});
                 });
@@ -384,12 +378,10 @@ struct Denoiser::Impl {
             inName = "despeckled";
         }
         switch (settings.method) {
-            case Method::Jbf: spatialOutput = addSpatialPasses(SpatialFilter::Jbf, in, inName); break;
-            case Method::Atrous:
-                spatialOutput = addSpatialPasses(SpatialFilter::Atrous, in, inName);
-                break;
+            case Method::Jbf: addSpatialPasses(SpatialFilter::Jbf, in, inName); break;
+            case Method::Atrous: addSpatialPasses(SpatialFilter::Atrous, in, inName); break;
             case Method::Temporal:
-                spatialOutput = addSpatialPasses(settings.temporal.spatialFilter, in, inName);
+                addSpatialPasses(settings.temporal.spatialFilter, in, inName);
                 addTemporalPasses();
                 break;
             case Method::Svgf:
@@ -411,9 +403,10 @@ struct Denoiser::Impl {
     }
 
     void ingest() {
-        launch(IngestKernel{layout, inBeauty.device, inNormal.device, inPosition.device,
-                            inDepth.device, reinterpret_cast<const std::int32_t*>(inId.device),
-                            frameHasAlbedo ? inAlbedo.device : nullptr, settings.albedo.epsilon,
+        auto floats = [](const InputBuffer& b) { return static_cast<const float*>(b.device); };
+        launch(IngestKernel{layout, floats(inBeauty), floats(inNormal), floats(inPosition),
+                            floats(inDepth), static_cast<const std::int32_t*>(inId.device),
+                            frameHasAlbedo ? floats(inAlbedo) : nullptr, settings.albedo.epsilon,
                 planes(noisy),
                             planes(albedo), planes(normal[current]), planes(position),
                             depth[current].data(), objectId[current].data(), nonFinite.data()});
@@ -462,7 +455,7 @@ struct Denoiser::Impl {
         };
         for (Source& s : sources) {
             if (device->sharesHostMemory() || s.host == nullptr) {
-                s.in->device = static_cast<const float*>(s.host);
+                s.in->device = s.host;
             } else {
                 device->copyToDevice(s.in->staging.data(), s.host, s.bytes);
                 s.in->device = s.in->staging.data();
@@ -474,7 +467,6 @@ struct Denoiser::Impl {
     void process(const Frame& f, Image& output) {
         checkFrame(f);
         if (f.width() != width() || f.height() != height()) allocate(f.width(), f.height());
-        frame = &f;
 
         auto start = Clock::now();
         bindInputs(f);
@@ -505,7 +497,6 @@ struct Denoiser::Impl {
         previousWorldToScreen = f.worldToScreen;
         hasHistory = temporal;
         current = 1 - current;
-        frame = nullptr;
     }
 
     // One value per pixel of a padded device plane, on the host.

@@ -93,14 +93,13 @@ TEST_F(Quality, TemporalBeatsSingleFrameAtrousWithAStaticCamera) {
 
 TEST_F(Quality, SvgfBeatsTemporalOnEveryScene) {
     for (auto& [scene, run] : runs_) {
-        // relMSE: measured svgf/temporal ratios 0.30 to 0.91.
+        // relMSE: measured svgf/temporal ratios 0.23 to 0.88.
         EXPECT_LT(run.scores["svgf"].mean.relMse, 0.95 * run.scores["temporal"].mean.relMse)
             << scene;
-        // Temporal error: where the lighting is static both sit at the floor set by the
-        // reference's own noise (measured ratios 0.88 to 1.005); where a light switches, svgf
-        // takes up the change more slowly than the assignment's tight clamp (measured 1.18):
-        // a finding (README), bounded here so that it cannot get worse unnoticed.
-        double bound = scene == "switching-light" ? 1.25 : 1.03;
+        // Temporal error: measured ratios 0.86 to 1.01. On moving-objects both sit at the
+        // floor set by the reference's own noise (0.0239 against 0.0237), which the metric
+        // cannot see below: a tie is accepted there, within 3 %.
+        double bound = scene == "moving-objects" ? 1.03 : 0.98;
         EXPECT_LT(*run.scores["svgf"].mean.temporalError,
                   bound * *run.scores["temporal"].mean.temporalError)
             << scene;

@@ -271,7 +271,7 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
         ->capture_default_str();
     c.add_option("--svgf-clamp-k", s.svgf.historyClampK,
                  "[>=0] svgf anti-lag: clamp the colour history to mu +- k sigma of the current "
-                 "7x7 neighbourhood (0: off)")
+                 "7x7 neighbourhood and shorten it where lighting changed (0: off, the paper)")
         ->capture_default_str();
     c.add_flag("--albedo,!--no-albedo", s.albedo.demodulate,
                "Where albedo_<i>.exr exists, filter colour / albedo and multiply it back (on by "

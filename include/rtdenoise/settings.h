@@ -60,8 +60,9 @@ struct SvgfSettings {
                                   // history (0: the first iteration, the paper's choice)
     int maxHistory = 32;          // [1, 1000] history length cap (frames)
     float historyClampK = 1.5f;   // [>=0] anti-lag: colour history clamped to mu +- k sigma of
-                                  // the current noisy 7x7 neighbourhood (0: off, the paper;
-                                  // 1.5 chosen on the rendered scenes, see README)
+                                  // the current noisy 7x7 neighbourhood, and history shortened
+                                  // where it is off that neighbourhood's mean (0: off, the
+                                  // paper; 1.5 chosen on the rendered scenes, see README)
 };
 
 // Albedo demodulation (every method): where a frame has an albedo, filter the illumination

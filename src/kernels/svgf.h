@@ -98,25 +98,30 @@ struct SvgfTemporalKernel {
             // Anti-lag: history outside what the current frame's neighbourhood allows (a light
             // switched, a shadow moved) is pulled into mu +- k sigma; ordinary history, inside
             // the wide 1-spp spread, is untouched.
-            float inv = 1.0f / maxf(columnSum(rowSums, 0, i, L.pitch, clampRadius), 1.0f);
-            float lo[3], hi[3];
+            float count = maxf(columnSum(rowSums, 0, i, L.pitch, clampRadius), 1.0f);
+            float inv = 1.0f / count;
+            float lo[3], hi[3], mean[3], sigma[3];
             for (int ch = 0; ch < 3; ++ch) {
-                float mean = columnSum(rowSums, 1 + ch, i, L.pitch, clampRadius) * inv;
+                mean[ch] = columnSum(rowSums, 1 + ch, i, L.pitch, clampRadius) * inv;
                 float meanSquare = columnSum(rowSums, 4 + ch, i, L.pitch, clampRadius) * inv;
-                float sigma = std::sqrt(maxf(meanSquare - mean * mean, 0.0f));
-                lo[ch] = mean - clampK * sigma;
-                hi[ch] = mean + clampK * sigma;
+                sigma[ch] = std::sqrt(maxf(meanSquare - mean[ch] * mean[ch], 0.0f));
+                lo[ch] = mean[ch] - clampK * sigma[ch];
+                hi[ch] = mean[ch] + clampK * sigma[ch];
             }
-            Float3 clamped =
-                clamp3(history, make3(lo[0], lo[1], lo[2]), make3(hi[0], hi[1], hi[2]));
-            // The further the clamp had to move the history, the less of it is trusted: the
-            // history length shrinks by the relative luminance change, so alpha = 1/h rises
-            // and the new lighting is taken up within a few frames.
-            float before = luminance(history), after = luminance(clamped);
-            float change = (before > after ? before - after : after - before) /
-                           maxf(maxf(before, after), 1e-4f);
-            h = maxf(h * (1.0f - change), 0.0f);
-            history = clamped;
+            // Lighting changed where the history is further from the neighbourhood's mean than
+            // that mean's own noise allows (3 standard errors, the mean of `count` samples):
+            // the history length is scaled by (1 - relative change beyond that)^4 (the power
+            // chosen on the rendered scenes), so alpha = 1/h rises and the new lighting is taken
+            // up within a frame or two: a cheap stand-in for A-SVGF's temporal gradients.
+            float meanL = luminance(make3(mean[0], mean[1], mean[2]));
+            float standardError = luminance(make3(sigma[0], sigma[1], sigma[2])) / std::sqrt(count);
+            float historyL = luminance(history);
+            float gap = maxf((historyL > meanL ? historyL - meanL : meanL - historyL) -
+                                 3.0f * standardError,
+                             0.0f);
+            float change = minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f);
+            h *= square(square(1.0f - change));
+            history = clamp3(history, make3(lo[0], lo[1], lo[2]), make3(hi[0], hi[1], hi[2]));
         }
         h = minf(h + 1.0f, maxHistory);
         // Equal weights for the first frames of a history, then the exponential average.
