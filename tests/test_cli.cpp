@@ -13,23 +13,9 @@ namespace fs = std::filesystem;
 namespace rtd {
 namespace {
 
-struct Result {
-    int exitCode;
-    std::string output;  // stdout and stderr
-};
-
-Result runCli(const std::string& arguments, const std::string& environment = "") {
-    std::string command = environment + " '" + RTD_CLI_PATH + "' " + arguments + " 2>&1";
-    FILE* pipe = popen(command.c_str(), "r");
-    std::string output;
-    std::array<char, 4096> buffer;
-    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe))
-        output.append(buffer.data(), n);
-    int status = pclose(pipe);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
-
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+using Result = test::CliResult;
+using test::quoted;
+using test::runCli;
 
 // A small moving-object sequence written in the course layout.
 void writeSequence(const fs::path& folder, int frames) {

@@ -268,25 +268,9 @@ TEST(Metrics, ContactSheetLayout) {
 
 // ---- the command ----
 
-struct Result {
-    int exitCode;
-    std::string output;  // stdout and stderr
-};
-
-Result runCli(const std::string& arguments) {
-    std::string command = std::string("'") + RTD_CLI_PATH + "' " + arguments + " 2>&1";
-    FILE* pipe = popen(command.c_str(), "r");
-    std::string output;
-    std::array<char, 4096> buffer;
-    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe))
-        output.append(buffer.data(), n);
-    int status = pclose(pipe);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
-
-std::string quoted(const fs::path& p) {
-    return "'" + p.string() + "'";
-}
+using Result = test::CliResult;
+using test::quoted;
+using test::runCli;
 
 std::string readText(const fs::path& file) {
     std::ifstream in(file);

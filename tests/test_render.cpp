@@ -518,21 +518,8 @@ TEST(Render, WrittenFolderIsASequenceWithReferenceAndSceneJson) {
 
 // ---- the command ----
 
-struct CliResult {
-    int exitCode;
-    std::string output;
-};
-
-CliResult runCli(const std::string& arguments) {
-    std::string command = std::string("'") + RTD_CLI_PATH + "' " + arguments + " 2>&1";
-    FILE* pipe = popen(command.c_str(), "r");
-    std::string output;
-    std::array<char, 4096> buffer;
-    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe))
-        output.append(buffer.data(), n);
-    int status = pclose(pipe);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using test::CliResult;
+using test::runCli;
 
 TEST(RenderCli, ListsTheScenes) {
     CliResult r = runCli("render --list");

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <array>
+#include <cstdio>
+#include <sys/wait.h>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -113,6 +115,27 @@ public:
 private:
     std::filesystem::path path_;
 };
+
+// Runs the built `rtdenoise` command (RTD_CLI_PATH) with `arguments` (and optional environment
+// assignments before it); returns its exit code and its stdout + stderr.
+struct CliResult {
+    int exitCode;
+    std::string output;
+};
+
+inline CliResult runCli(const std::string& arguments, const std::string& environment = "") {
+    std::string command = environment + " '" + RTD_CLI_PATH + "' " + arguments + " 2>&1";
+    FILE* pipe = popen(command.c_str(), "r");
+    std::string output;
+    std::array<char, 4096> buffer;
+    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe))
+        output.append(buffer.data(), n);
+    int status = pclose(pipe);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+// A path quoted for the shell command line above.
+inline std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 
 inline std::filesystem::path boxFolder() {
     return std::filesystem::path(RTD_SHARED_DIR) / "data" / "box";

@@ -42,24 +42,6 @@ const std::map<std::string, SpatialFilter> kFilters{{"jbf", SpatialFilter::Jbf},
 const std::map<std::string, DeviceType> kDevices{
     {"cpu", DeviceType::Cpu}, {"cuda", DeviceType::Cuda}, {"auto", DeviceType::Auto}};
 
-void ensureWritableFolder(const fs::path& folder) {
-    std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (ec || !fs::is_directory(folder))
-        throw Error(ErrorCode::IoFailure,
-                    fmt::format("{}: cannot create the output folder ({})", folder.string(),
-                                ec ? ec.message() : "not a directory"));
-    // Probe with a real file: permissions, read-only mounts and full disks all show here.
-    fs::path probe = folder / ".rtdenoise-write-test";
-    try {
-        writeFileAtomically(probe, "");
-    } catch (const Error&) {
-        throw Error(ErrorCode::IoFailure,
-                    fmt::format("{}: the output folder is not writable", folder.string()));
-    }
-    fs::remove(probe, ec);
-}
-
 double median(std::vector<double> v) {
     if (v.empty()) return 0.0;
     std::sort(v.begin(), v.end());
@@ -71,7 +53,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     Sequence sequence(options.input);
     int frames = sequence.frameCount();
     if (options.maxFrames > 0) frames = std::min(frames, options.maxFrames);
-    ensureWritableFolder(options.output);
+    prepareOutputFolder(options.output);
     if (!options.video.empty() && !VideoWriter::ffmpegAvailable())
         throw Error(ErrorCode::MissingTool,
                     "ffmpeg not found on PATH: install it (apt-get install ffmpeg) or drop --video");

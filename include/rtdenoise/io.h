@@ -89,6 +89,10 @@ private:
     std::vector<unsigned char> rowBuffer_;
 };
 
+// Creates `folder` (and its parents) if needed and checks that a file can be written in it;
+// throws IoFailure naming the folder otherwise. Call before a long job, not after it.
+void prepareOutputFolder(const std::filesystem::path& folder);
+
 // Writes `bytes` to `file` through a temporary name in the same folder and a rename.
 void writeFileAtomically(const std::filesystem::path& file, const std::string& bytes);
 

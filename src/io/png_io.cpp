@@ -1,4 +1,5 @@
 // PNG writing with libpng, encoded in memory and published with writeFileAtomically.
+#include <fmt/format.h>
 #include <png.h>
 
 #include <algorithm>
@@ -130,6 +131,24 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& b
     if (!written) fail(writeError);
     if (!closed) fail(errno);
     temporary.commitTo(file);
+}
+
+void prepareOutputFolder(const std::filesystem::path& folder) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec || !std::filesystem::is_directory(folder))
+        throw Error(ErrorCode::IoFailure,
+                    fmt::format("{}: cannot create the output folder ({})", folder.string(),
+                                ec ? ec.message() : "not a directory"));
+    // Probe with a real file: permissions, read-only mounts and full disks all show here.
+    std::filesystem::path probe = folder / ".rtdenoise-write-test";
+    try {
+        writeFileAtomically(probe, "");
+    } catch (const Error&) {
+        throw Error(ErrorCode::IoFailure,
+                    fmt::format("{}: the output folder is not writable", folder.string()));
+    }
+    std::filesystem::remove(probe, ec);
 }
 
 }  // namespace rtd

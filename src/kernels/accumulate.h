@@ -28,17 +28,9 @@ struct AccumulateKernel {
             out.store(i, c);
             return;
         }
-        float inv = 1.0f / maxf(columnSum(rowSums, 0, i, L.pitch, radius), 1.0f);
-        float lo[3], hi[3];
-        for (int ch = 0; ch < 3; ++ch) {
-            float mean = columnSum(rowSums, 1 + ch, i, L.pitch, radius) * inv;
-            float meanSquare = columnSum(rowSums, 4 + ch, i, L.pitch, radius) * inv;
-            float sigma = std::sqrt(maxf(meanSquare - mean * mean, 0.0f));
-            lo[ch] = mean - clampK * sigma;
-            hi[ch] = mean + clampK * sigma;
-        }
-        Float3 history = clamp3(reprojected.load(i), make3(lo[0], lo[1], lo[2]),
-                                make3(hi[0], hi[1], hi[2]));
+        ColorWindowStats w = colorWindowStats(rowSums, i, L.pitch, radius);
+        Float3 history = clamp3(reprojected.load(i), w.mean - w.sigma * clampK,
+                                w.mean + w.sigma * clampK);
         out.store(i, c * alpha + history * (1.0f - alpha));
     }
 };

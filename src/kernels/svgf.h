@@ -98,30 +98,21 @@ struct SvgfTemporalKernel {
             // Anti-lag: history outside what the current frame's neighbourhood allows (a light
             // switched, a shadow moved) is pulled into mu +- k sigma; ordinary history, inside
             // the wide 1-spp spread, is untouched.
-            float count = maxf(columnSum(rowSums, 0, i, L.pitch, clampRadius), 1.0f);
-            float inv = 1.0f / count;
-            float lo[3], hi[3], mean[3], sigma[3];
-            for (int ch = 0; ch < 3; ++ch) {
-                mean[ch] = columnSum(rowSums, 1 + ch, i, L.pitch, clampRadius) * inv;
-                float meanSquare = columnSum(rowSums, 4 + ch, i, L.pitch, clampRadius) * inv;
-                sigma[ch] = std::sqrt(maxf(meanSquare - mean[ch] * mean[ch], 0.0f));
-                lo[ch] = mean[ch] - clampK * sigma[ch];
-                hi[ch] = mean[ch] + clampK * sigma[ch];
-            }
+            ColorWindowStats w = colorWindowStats(rowSums, i, L.pitch, clampRadius);
             // Lighting changed where the history is further from the neighbourhood's mean than
             // that mean's own noise allows (3 standard errors, the mean of `count` samples):
             // the history length is scaled by (1 - relative change beyond that)^4 (the power
             // chosen on the rendered scenes), so alpha = 1/h rises and the new lighting is taken
             // up within a frame or two: a cheap stand-in for A-SVGF's temporal gradients.
-            float meanL = luminance(make3(mean[0], mean[1], mean[2]));
-            float standardError = luminance(make3(sigma[0], sigma[1], sigma[2])) / std::sqrt(count);
+            float meanL = luminance(w.mean);
+            float standardError = luminance(w.sigma) / std::sqrt(w.count);
             float historyL = luminance(history);
             float gap = maxf((historyL > meanL ? historyL - meanL : meanL - historyL) -
                                  3.0f * standardError,
                              0.0f);
             float change = minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f);
             h *= square(square(1.0f - change));
-            history = clamp3(history, make3(lo[0], lo[1], lo[2]), make3(hi[0], hi[1], hi[2]));
+            history = clamp3(history, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
         }
         h = minf(h + 1.0f, maxHistory);
         // Equal weights for the first frames of a history, then the exponential average.

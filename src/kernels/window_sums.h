@@ -64,4 +64,27 @@ RTD_HOST_DEVICE RTD_INLINE float columnSum(const PlaneSet& sums, int plane, int 
     return total;
 }
 
+// Per-channel mean and standard deviation of the object pixels in pixel i's (2r+1)^2 window,
+// from ColorRowSumsKernel's planes.
+struct ColorWindowStats {
+    Float3 mean, sigma;
+    float count;  // object pixels in the window (at least 1 reported, to divide by)
+};
+
+RTD_HOST_DEVICE RTD_INLINE ColorWindowStats colorWindowStats(const PlaneSet& rowSums, int i,
+                                                            int pitch, int radius) {
+    ColorWindowStats s;
+    s.count = maxf(columnSum(rowSums, 0, i, pitch, radius), 1.0f);
+    float inv = 1.0f / s.count;
+    float m[3], sd[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        m[ch] = columnSum(rowSums, 1 + ch, i, pitch, radius) * inv;
+        float meanSquare = columnSum(rowSums, 4 + ch, i, pitch, radius) * inv;
+        sd[ch] = std::sqrt(maxf(meanSquare - m[ch] * m[ch], 0.0f));
+    }
+    s.mean = make3(m[0], m[1], m[2]);
+    s.sigma = make3(sd[0], sd[1], sd[2]);
+    return s;
+}
+
 }  // namespace rtd

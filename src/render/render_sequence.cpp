@@ -132,14 +132,6 @@ void removeStaleFrames(const fs::path& folder, int frames) {
     }
 }
 
-void makeFolder(const fs::path& folder) {
-    std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (ec || !fs::is_directory(folder))
-        throw Error(ErrorCode::IoFailure,
-                    fmt::format("{}: cannot create the output folder ({})", folder.string(),
-                                ec ? ec.message() : "not a directory"));
-}
 
 }  // namespace
 
@@ -184,9 +176,9 @@ void renderSequence(const std::string& sceneName, const RenderSettings& settings
                 ErrorCode::InvalidArgument,
                 fmt::format("scene '{}': the object count changes at frame {}", sceneName, i));
     }
-    makeFolder(outDir);
+    prepareOutputFolder(outDir);
     const fs::path referenceDir = outDir / "reference";
-    if (!settings.gbufferOnly) makeFolder(referenceDir);
+    if (!settings.gbufferOnly) prepareOutputFolder(referenceDir);
     removeStaleFrames(outDir, settings.frames);
     if (fs::is_directory(referenceDir))
         removeStaleFrames(referenceDir, settings.gbufferOnly ? 0 : settings.frames);
