@@ -38,12 +38,11 @@ inline void baselineJbf(const Frame& f, const DenoiserSettings& s, Image& out, i
                     }
                     float dNormal = std::acos(std::clamp(dot, -1.0f, 1.0f));
                     float dPlane = dp2 > 0 ? along / std::sqrt(dp2) : 0.0f;
-                    float weight = std::exp(
-                        -float(sq(float(px - x)) + sq(float(py - y))) /
-                            (2 * sq(s.jbf.sigmaCoord)) -
-                        dc2 / (2 * sq(s.edges.sigmaColor)) -
-                        sq(dNormal) / (2 * sq(s.edges.sigmaNormal)) -
-                        sq(dPlane) / (2 * sq(s.edges.sigmaPlane)));
+                    float weight = std::exp(-float(sq(float(px - x)) + sq(float(py - y))) /
+                                                (2 * sq(s.jbf.sigmaCoord)) -
+                                            dc2 / (2 * sq(s.edges.sigmaColor)) -
+                                            sq(dNormal) / (2 * sq(s.edges.sigmaNormal)) -
+                                            sq(dPlane) / (2 * sq(s.edges.sigmaPlane)));
                     for (int c = 0; c < 3; ++c) sum[c] += weight * f.beauty.at(px, py, c);
                     sumW += weight;
                 }

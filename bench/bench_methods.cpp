@@ -58,13 +58,21 @@ void runMethod(benchmark::State& state, Method method, SpatialFilter filter) {
     state.SetLabel(denoiser.deviceName());
 }
 
-void BM_Jbf(benchmark::State& s) { runMethod(s, Method::Jbf, SpatialFilter::Jbf); }
-void BM_Atrous(benchmark::State& s) { runMethod(s, Method::Atrous, SpatialFilter::Atrous); }
+void BM_Jbf(benchmark::State& s) {
+    runMethod(s, Method::Jbf, SpatialFilter::Jbf);
+}
+void BM_Atrous(benchmark::State& s) {
+    runMethod(s, Method::Atrous, SpatialFilter::Atrous);
+}
 void BM_TemporalAtrous(benchmark::State& s) {
     runMethod(s, Method::Temporal, SpatialFilter::Atrous);
 }
-void BM_TemporalJbf(benchmark::State& s) { runMethod(s, Method::Temporal, SpatialFilter::Jbf); }
-void BM_Svgf(benchmark::State& s) { runMethod(s, Method::Svgf, SpatialFilter::Atrous); }
+void BM_TemporalJbf(benchmark::State& s) {
+    runMethod(s, Method::Temporal, SpatialFilter::Jbf);
+}
+void BM_Svgf(benchmark::State& s) {
+    runMethod(s, Method::Svgf, SpatialFilter::Atrous);
+}
 
 // state.range(0): threads (1: the course code as written, 2: both cores of this machine).
 void BM_BaselineJbf(benchmark::State& state) {

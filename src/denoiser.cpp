@@ -52,9 +52,9 @@ void checkFrame(const Frame& f) {
     checkImage(f.depth, w, h, 1, "depth");
     if (f.albedo) checkImage(*f.albedo, w, h, 3, "albedo");
     if (f.objectId.size() != std::size_t(w) * h)
-        throw Error(ErrorCode::InvalidInput,
-                    fmt::format("frame: objectId has {} values, expected {}x{}",
-                                f.objectId.size(), w, h));
+        throw Error(
+            ErrorCode::InvalidInput,
+            fmt::format("frame: objectId has {} values, expected {}x{}", f.objectId.size(), w, h));
     auto objectCount = std::int32_t(f.objectToWorld.size());
     for (std::size_t i = 0; i < f.objectId.size(); ++i) {
         std::int32_t id = f.objectId[i];
@@ -102,7 +102,7 @@ struct Denoiser::Impl {
     DeviceBuffer<std::uint8_t> nonFinite, validity;
     // svgf only
     DeviceBuffer<float> illumination, varianceOut, filterA, filterB;  // 3, 4, 4, 4 planes
-    DeviceBuffer<float> moments[2], historyLength[2], feedback[2];  // 2, 1, 4 planes
+    DeviceBuffer<float> moments[2], historyLength[2], feedback[2];    // 2, 1, 4 planes
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
@@ -133,8 +133,7 @@ struct Denoiser::Impl {
                 objectId[current].data()};
     }
     PreviousGeometry previousGeometry() const {
-        return {objectId[previous()].data(), depth[previous()].data(),
-                planes(normal[previous()])};
+        return {objectId[previous()].data(), depth[previous()].data(), planes(normal[previous()])};
     }
     HistoryTest historyTest() const {
         return {settings.history.geometryTests ? 1 : 0, settings.history.depthTolerance,
@@ -206,12 +205,13 @@ struct Denoiser::Impl {
 
     void addPass(std::string name, std::vector<std::string> inputs,
                  std::vector<std::string> outputs, std::function<void()> run) {
-        pipeline.push_back({{std::move(name), std::move(inputs), std::move(outputs)}, std::move(run)});
+        pipeline.push_back(
+            {{std::move(name), std::move(inputs), std::move(outputs)}, std::move(run)});
     }
 
     // Adds the spatial filter reading `in`; its result lands in `filtered`.
     void addSpatialPasses(SpatialFilter filter, DeviceBuffer<float>* in,
-                                          const std::string& inName) {
+                          const std::string& inName) {
         const EdgeStoppingTerms edges = edgeTerms(settings.edges);
         if (filter == SpatialFilter::Jbf) {
             padding = std::max(padding, settings.jbf.radius);
@@ -281,19 +281,27 @@ struct Denoiser::Impl {
     Slot svgfResult = Slot::Variance;  // where the last iteration leaves its output
     DeviceBuffer<float>& slot(Slot s) {
         switch (s) {
-            case Slot::Variance: return varianceOut;
-            case Slot::A: return filterA;
-            case Slot::B: return filterB;
-            case Slot::Feedback: return feedback[current];
+            case Slot::Variance:
+                return varianceOut;
+            case Slot::A:
+                return filterA;
+            case Slot::B:
+                return filterB;
+            case Slot::Feedback:
+                return feedback[current];
         }
         return filterA;
     }
     static std::string slotName(Slot s) {
         switch (s) {
-            case Slot::Variance: return "illumination+variance";
-            case Slot::A: return "filterA";
-            case Slot::B: return "filterB";
-            case Slot::Feedback: return "feedback";
+            case Slot::Variance:
+                return "illumination+variance";
+            case Slot::A:
+                return "filterA";
+            case Slot::B:
+                return "filterB";
+            case Slot::Feedback:
+                return "feedback";
         }
         return "?";
     }
@@ -306,7 +314,6 @@ struct Denoiser::Impl {
         padding = std::max({padding, kVarianceRadius, 2 << (sv.iterations - 1)});
         addGeometryPass();
         if (sv.historyClampK > 0.0f) {
-            padding = std::max(padding, kVarianceRadius);
             addPass("svgf-clamp-rows", {inName, "objectId"}, {"windowSums"}, [this, in] {
                 launch(ColorRowSumsKernel{gbuffer(), planes(*in), sums(), kVarianceRadius});
             });
@@ -315,25 +322,37 @@ struct Denoiser::Impl {
                 {inName, "windowSums", "position", "normal", "depth", "objectId", "derivatives",
                  "previous geometry", "feedback", "moments", "historyLength", "matrices"},
                 {"illumination", "moments", "historyLength", "validity"}, [this, in, sv] {
-                    launch(SvgfTemporalKernel{
-                        gbuffer(), previousGeometry(), objects.data(), planeSet(derivatives),
-                        historyTest(), planes(*in), sums(), kVarianceRadius, sv.historyClampK,
-                        planeSet(feedback[previous()]), planeSet(moments[previous()]),
-                        historyLength[previous()].data(), planes(illumination),
-                        planeSet(moments[current]), historyLength[current].data(),
-                        validity.data(), sv.alpha, sv.momentsAlpha, float(sv.maxHistory),
-                        hasHistory ? 1 : 0});
+                    launch(SvgfTemporalKernel{gbuffer(),
+                                              previousGeometry(),
+                                              objects.data(),
+                                              planeSet(derivatives),
+                                              historyTest(),
+                                              planes(*in),
+                                              sums(),
+                                              kVarianceRadius,
+                                              sv.historyClampK,
+                                              planeSet(feedback[previous()]),
+                                              planeSet(moments[previous()]),
+                                              historyLength[previous()].data(),
+                                              planes(illumination),
+                                              planeSet(moments[current]),
+                                              historyLength[current].data(),
+                                              validity.data(),
+                                              sv.alpha,
+                                              sv.momentsAlpha,
+                                              float(sv.maxHistory),
+                                              hasHistory ? 1 : 0});
                 });
         addPass("svgf-variance", {"illumination", "moments", "historyLength", "derivatives"},
                 {"illumination+variance"}, [this, terms] {
                     // The moments pass uses Falcor's wider luminance tolerance: no variance yet.
                     SvgfTerms wide = terms;
                     wide.sigmaLuminance = 10.0f;
+                    constexpr float kShortHistory = 4.0f;  // frames: below, estimate spatially
                     launch(SvgfVarianceKernel{gbuffer(), planeSet(derivatives),
                                               planes(illumination), planeSet(moments[current]),
-                                              historyLength[current].data(),
-                                              planeSet(varianceOut), wide, 4.0f,
-                                              kVarianceRadius});
+                                              historyLength[current].data(), planeSet(varianceOut),
+                                              wide, kShortHistory, kVarianceRadius});
                 });
         // Iterations read the variance pass's output (kept for the debug view), then ping-pong
         // between filterA and filterB; the feedback iteration writes the next frame's colour
@@ -343,13 +362,12 @@ struct Denoiser::Impl {
             bool isFeedback = it == sv.feedbackIteration;
             Slot dst = isFeedback ? Slot::Feedback : (src == Slot::A ? Slot::B : Slot::A);
             int stride = 1 << it;
-            addPass(fmt::format("svgf-atrous{}", it),
-                    {slotName(src), "normal", "depth", "derivatives"}, {slotName(dst)},
-                    [this, terms, stride, src, dst] {
-                        launch(SvgfAtrousKernel{gbuffer(), planeSet(derivatives),
-                                                planeSet(slot(src)), planeSet(slot(dst)), stride,
-                                                terms});
-                    });
+            addPass(
+                fmt::format("svgf-atrous{}", it), {slotName(src), "normal", "depth", "derivatives"},
+                {slotName(dst)}, [this, terms, stride, src, dst] {
+                    launch(SvgfAtrousKernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
+                                            planeSet(slot(dst)), stride, terms});
+                });
             src = dst;
         }
         svgfResult = src;
@@ -358,8 +376,7 @@ struct Denoiser::Impl {
     void buildPipeline() {
         padding = std::max(settings.outlier.enabled ? settings.outlier.radius : 0,
                            settings.method == Method::Temporal ? settings.temporal.clampRadius : 0);
-        addPass("ingest", {"frame"},
-                {"noisy", "albedo", "normal", "position", "depth", "objectId"},
+        addPass("ingest", {"frame"}, {"noisy", "albedo", "normal", "position", "depth", "objectId"},
                 [this] { ingest(); });
         DeviceBuffer<float>* in = &noisy;
         std::string inName = "noisy";
@@ -378,8 +395,12 @@ struct Denoiser::Impl {
             inName = "despeckled";
         }
         switch (settings.method) {
-            case Method::Jbf: addSpatialPasses(SpatialFilter::Jbf, in, inName); break;
-            case Method::Atrous: addSpatialPasses(SpatialFilter::Atrous, in, inName); break;
+            case Method::Jbf:
+                addSpatialPasses(SpatialFilter::Jbf, in, inName);
+                break;
+            case Method::Atrous:
+                addSpatialPasses(SpatialFilter::Atrous, in, inName);
+                break;
             case Method::Temporal:
                 addSpatialPasses(settings.temporal.spatialFilter, in, inName);
                 addTemporalPasses();
@@ -407,9 +428,9 @@ struct Denoiser::Impl {
         launch(IngestKernel{layout, floats(inBeauty), floats(inNormal), floats(inPosition),
                             floats(inDepth), static_cast<const std::int32_t*>(inId.device),
                             frameHasAlbedo ? floats(inAlbedo) : nullptr, settings.albedo.epsilon,
-                planes(noisy),
-                            planes(albedo), planes(normal[current]), planes(position),
-                            depth[current].data(), objectId[current].data(), nonFinite.data()});
+                            planes(noisy), planes(albedo), planes(normal[current]),
+                            planes(position), depth[current].data(), objectId[current].data(),
+                            nonFinite.data()});
     }
 
     // One matrix per object: current world -> object -> previous world (-> previous screen).
@@ -554,13 +575,27 @@ Image Denoiser::processFrame(const Frame& frame) {
     return output;
 }
 
-void Denoiser::processFrame(const Frame& frame, Image& output) { impl_->process(frame, output); }
+void Denoiser::processFrame(const Frame& frame, Image& output) {
+    impl_->process(frame, output);
+}
 
-void Denoiser::reset() { impl_->hasHistory = false; }
-const DenoiserSettings& Denoiser::settings() const { return impl_->settings; }
-const std::vector<PassInfo>& Denoiser::passes() const { return impl_->passInfos; }
-const FrameStats& Denoiser::lastFrameStats() const { return impl_->stats; }
-std::string Denoiser::deviceName() const { return impl_->device->name(); }
-Image Denoiser::debugImage(DebugView view) const { return impl_->debugImage(view); }
+void Denoiser::reset() {
+    impl_->hasHistory = false;
+}
+const DenoiserSettings& Denoiser::settings() const {
+    return impl_->settings;
+}
+const std::vector<PassInfo>& Denoiser::passes() const {
+    return impl_->passInfos;
+}
+const FrameStats& Denoiser::lastFrameStats() const {
+    return impl_->stats;
+}
+std::string Denoiser::deviceName() const {
+    return impl_->device->name();
+}
+Image Denoiser::debugImage(DebugView view) const {
+    return impl_->debugImage(view);
+}
 
 }  // namespace rtd

@@ -1,8 +1,9 @@
+#include "rtdenoise/settings.h"
+
 #include <cmath>
 #include <string>
 
 #include "rtdenoise/error.h"
-#include "rtdenoise/settings.h"
 
 namespace rtd {
 namespace {
@@ -10,7 +11,9 @@ namespace {
 void require(bool ok, const std::string& what) {
     if (!ok) throw Error(ErrorCode::InvalidArgument, "invalid setting: " + what);
 }
-bool positive(float v) { return std::isfinite(v) && v > 0.0f; }
+bool positive(float v) {
+    return std::isfinite(v) && v > 0.0f;
+}
 
 }  // namespace
 
@@ -23,8 +26,7 @@ void validate(const DenoiserSettings& s) {
     require(s.atrous.passes >= 1 && s.atrous.passes <= 10, "atrous passes must be in [1, 10]");
     require(s.outlier.radius >= 1 && s.outlier.radius <= 15, "outlier radius must be in [1, 15]");
     require(positive(s.outlier.k), "outlier k must be > 0");
-    require(std::isfinite(s.temporal.alpha) && s.temporal.alpha >= 0.0f &&
-                s.temporal.alpha <= 1.0f,
+    require(std::isfinite(s.temporal.alpha) && s.temporal.alpha >= 0.0f && s.temporal.alpha <= 1.0f,
             "alpha must be in [0, 1]");
     require(positive(s.temporal.clampK), "clamp k must be > 0");
     require(s.temporal.clampRadius >= 1 && s.temporal.clampRadius <= 15,
@@ -50,10 +52,14 @@ void validate(const DenoiserSettings& s) {
 
 const char* toString(Method method) {
     switch (method) {
-        case Method::Jbf: return "jbf";
-        case Method::Atrous: return "atrous";
-        case Method::Temporal: return "temporal";
-        case Method::Svgf: return "svgf";
+        case Method::Jbf:
+            return "jbf";
+        case Method::Atrous:
+            return "atrous";
+        case Method::Temporal:
+            return "temporal";
+        case Method::Svgf:
+            return "svgf";
     }
     return "?";
 }
@@ -64,9 +70,12 @@ const char* toString(SpatialFilter filter) {
 
 const char* toString(DeviceType device) {
     switch (device) {
-        case DeviceType::Cpu: return "cpu";
-        case DeviceType::Cuda: return "cuda";
-        case DeviceType::Auto: return "auto";
+        case DeviceType::Cpu:
+            return "cpu";
+        case DeviceType::Cuda:
+            return "cuda";
+        case DeviceType::Auto:
+            return "auto";
     }
     return "?";
 }

@@ -60,7 +60,7 @@ struct MethodRun {
 };
 
 class BoxQuality : public ::testing::Test {
-protected:
+  protected:
     static void SetUpTestSuite() {
         if (!std::filesystem::exists(test::boxFolder() / "beauty_0.exr")) return;
         Sequence sequence(test::boxFolder());
@@ -98,9 +98,10 @@ TEST_F(BoxQuality, AtrousCutsFlatRegionNoiseFivefoldTemporalMore) {
     double input = highPassNoise(frames_[last].beauty);
     double atrous = highPassNoise(runs_[Method::Atrous].outputs[last]);
     double temporal = highPassNoise(runs_[Method::Temporal].outputs[last]);
-    std::printf("high-pass noise on the back wall: input %.5f, atrous %.5f (%.1fx), temporal "
-                "%.5f (%.1fx)\n",
-                input, atrous, input / atrous, temporal, input / temporal);
+    std::printf(
+        "high-pass noise on the back wall: input %.5f, atrous %.5f (%.1fx), temporal "
+        "%.5f (%.1fx)\n",
+        input, atrous, input / atrous, temporal, input / temporal);
     EXPECT_GE(input / atrous, 5.0);
     EXPECT_LT(temporal, atrous);
 }
@@ -117,7 +118,8 @@ TEST_F(BoxQuality, MeanRadianceIsKeptWithinTwoPercent) {
 TEST_F(BoxQuality, TemporalIsSteadierThanAtrousInStaticRegions) {
     double atrous = 0, temporal = 0;
     for (std::size_t i = 1; i < frames_.size(); ++i) {
-        atrous += patchChange(runs_[Method::Atrous].outputs[i], runs_[Method::Atrous].outputs[i - 1]);
+        atrous +=
+            patchChange(runs_[Method::Atrous].outputs[i], runs_[Method::Atrous].outputs[i - 1]);
         temporal +=
             patchChange(runs_[Method::Temporal].outputs[i], runs_[Method::Temporal].outputs[i - 1]);
     }

@@ -40,18 +40,20 @@ TEST(Cli, HelpDocumentsEveryOption) {
     Result r = runCli("denoise --help");
     EXPECT_EQ(r.exitCode, 0);
     for (const char* option :
-         {"--method", "--spatial-filter", "--device", "--sigma-color", "--sigma-normal",
-          "--sigma-plane", "--sigma-coord", "--radius", "--atrous-passes", "--alpha", "--clamp-k",
-          "--clamp-radius", "--outlier", "--outlier-radius", "--outlier-k", "--png", "--exposure",
-          "--video", "--config", "--debug", "--separate-objects"})
+         {"--method",          "--spatial-filter", "--device",      "--sigma-color",
+          "--sigma-normal",    "--sigma-plane",    "--sigma-coord", "--radius",
+          "--atrous-passes",   "--alpha",          "--clamp-k",     "--clamp-radius",
+          "--outlier",         "--outlier-radius", "--outlier-k",   "--png",
+          "--exposure",        "--video",          "--config",      "--debug",
+          "--separate-objects"})
         EXPECT_NE(r.output.find(option), std::string::npos) << option;
 }
 
 TEST(Cli, DenoisesASequenceIntoResultFiles) {
     test::TempFolder dir("cli-run");
     writeSequence(dir.path() / "in", 3);
-    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
-                      quoted(dir.path() / "out") + " --png --debug");
+    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " + quoted(dir.path() / "out") +
+                      " --png --debug");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     for (int i = 0; i < 3; ++i) {
         std::string n = std::to_string(i);
@@ -61,7 +63,7 @@ TEST(Cli, DenoisesASequenceIntoResultFiles) {
         for (const char* view : {"reprojection_", "variance_", "history_"})
             EXPECT_TRUE(fs::exists(dir.path() / "out" / (view + n + ".png"))) << view << n;
     }
-    EXPECT_NE(r.output.find("frame 3/3"), std::string::npos) << r.output;  // progress
+    EXPECT_NE(r.output.find("frame 3/3"), std::string::npos) << r.output;      // progress
     EXPECT_NE(r.output.find("svgf-temporal"), std::string::npos) << r.output;  // per-pass summary
     Image result = readExr(dir.path() / "out" / "result_2.exr", {{"R"}, {"G"}, {"B"}});
     EXPECT_EQ(result.width, 24);
@@ -72,9 +74,8 @@ TEST(Cli, ConfigFileSetsOptionsAndFlagsOverrideIt) {
     test::TempFolder dir("cli-config");
     writeSequence(dir.path() / "in", 2);
     std::ofstream(dir.path() / "settings.toml") << "method = \"jbf\"\nradius = 3\n";
-    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
-                      quoted(dir.path() / "out") + " --config " +
-                      quoted(dir.path() / "settings.toml"));
+    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " + quoted(dir.path() / "out") +
+                      " --config " + quoted(dir.path() / "settings.toml"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("method jbf"), std::string::npos) << r.output;
     r = runCli("denoise " + quoted(dir.path() / "in") + " -o " + quoted(dir.path() / "out") +
@@ -92,8 +93,8 @@ TEST(Cli, ConfigFileSetsOptionsAndFlagsOverrideIt) {
 TEST(Cli, BadInputFailsNamingTheProblem) {
     test::TempFolder dir("cli-bad");
     // Missing folder.
-    Result r = runCli("denoise " + quoted(dir.path() / "nothing") + " -o " +
-                      quoted(dir.path() / "out"));
+    Result r =
+        runCli("denoise " + quoted(dir.path() / "nothing") + " -o " + quoted(dir.path() / "out"));
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("nothing"), std::string::npos) << r.output;
     // A gap in the numbering.
@@ -128,9 +129,8 @@ TEST(Cli, BadInputFailsNamingTheProblem) {
 TEST(Cli, VideoWithoutFfmpegIsAClearError) {
     test::TempFolder dir("cli-video");
     writeSequence(dir.path() / "in", 1);
-    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
-                          quoted(dir.path() / "out") + " --video " +
-                          quoted(dir.path() / "v.mp4"),
+    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " + quoted(dir.path() / "out") +
+                          " --video " + quoted(dir.path() / "v.mp4"),
                       "PATH=/nonexistent");
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("ffmpeg"), std::string::npos) << r.output;
@@ -141,8 +141,8 @@ TEST(Cli, WritesAVideoWhenFfmpegIsThere) {
     if (!VideoWriter::ffmpegAvailable()) GTEST_SKIP() << "ffmpeg is not installed";
     test::TempFolder dir("cli-video2");
     writeSequence(dir.path() / "in", 3);
-    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
-                      quoted(dir.path() / "out") + " --video " + quoted(dir.path() / "v.mp4"));
+    Result r = runCli("denoise " + quoted(dir.path() / "in") + " -o " + quoted(dir.path() / "out") +
+                      " --video " + quoted(dir.path() / "v.mp4"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_GT(fs::file_size(dir.path() / "v.mp4"), 100u);
 }

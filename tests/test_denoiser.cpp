@@ -112,9 +112,7 @@ TEST(Denoiser, WithoutObjectSeparationTheIdEdgeIsBlurred) {
 TEST(Denoiser, BackgroundPassesThrough) {
     SceneDescription d;
     d.id = [](int x, int) { return x < 8 ? -1 : 0; };
-    d.colour = [](int x, int y) {
-        return std::array<float, 3>{float(x % 3), float(y % 5), 0.5f};
-    };
+    d.colour = [](int x, int y) { return std::array<float, 3>{float(x % 3), float(y % 5), 0.5f}; };
     Frame frame = makeFrame(d);
     for (Method method : kAllMethods) {
         Denoiser denoiser(settingsFor(method));
@@ -152,10 +150,10 @@ double referenceJbf(const Frame& f, int x, int y, int c, const DenoiserSettings&
             double dNormal = std::acos(std::clamp(dot, -1.0, 1.0));
             double dPlane = dp2 > 0 ? along / std::sqrt(dp2) : 0.0;
             auto sq = [](double v) { return v * v; };
-            double weight = std::exp(
-                -(sq(px - x) + sq(py - y)) / (2 * sq(s.jbf.sigmaCoord)) -
-                dc2 / (2 * sq(s.edges.sigmaColor)) - sq(dNormal) / (2 * sq(s.edges.sigmaNormal)) -
-                sq(dPlane) / (2 * sq(s.edges.sigmaPlane)));
+            double weight = std::exp(-(sq(px - x) + sq(py - y)) / (2 * sq(s.jbf.sigmaCoord)) -
+                                     dc2 / (2 * sq(s.edges.sigmaColor)) -
+                                     sq(dNormal) / (2 * sq(s.edges.sigmaNormal)) -
+                                     sq(dPlane) / (2 * sq(s.edges.sigmaPlane)));
             sum += weight * cj[c];
             sumW += weight;
         }
@@ -255,7 +253,7 @@ TEST(Reprojection, KnownObjectTranslationFetchesTheShiftedPixel) {
             EXPECT_NEAR(out.at(x, y, 0), float(x - shift), 1e-3f) << x << "," << y;
             EXPECT_EQ(debug.at(x, y, 1), 1.0f);
         }
-        for (int x = 8; x < 8 + shift; ++x) {  // wall uncovered: last frame held the object
+        for (int x = 8; x < 8 + shift; ++x) {    // wall uncovered: last frame held the object
             EXPECT_EQ(debug.at(x, y, 0), 1.0f);  // yellow: other object
             EXPECT_EQ(debug.at(x, y, 1), 1.0f);
             EXPECT_EQ(debug.at(x, y, 2), 0.0f);
@@ -342,10 +340,9 @@ TEST(Denoiser, PassesAreListedWithTheirBuffers) {
     Denoiser temporal(settingsFor(Method::Temporal));
     std::vector<std::string> names;
     for (const PassInfo& p : temporal.passes()) names.push_back(p.name);
-    std::vector<std::string> expected{"ingest",   "outlier-rows", "outlier",   "atrous0",
-                                      "atrous1",  "atrous2",      "atrous3",   "atrous4",
-                                      "geometry", "reproject",    "clamp-rows", "accumulate",
-                                      "modulate"};
+    std::vector<std::string> expected{
+        "ingest",  "outlier-rows", "outlier",   "atrous0",    "atrous1",    "atrous2", "atrous3",
+        "atrous4", "geometry",     "reproject", "clamp-rows", "accumulate", "modulate"};
     EXPECT_EQ(names, expected);
     EXPECT_EQ(temporal.passes()[9].outputs, (std::vector<std::string>{"reprojected", "validity"}));
 }

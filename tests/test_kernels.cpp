@@ -52,9 +52,9 @@ TEST(Atrous, TapsLieAtMultiplesOfTheStrideWithB3Weights) {
         Harness h(size, size, 2 * stride);
         h.setAll(h.a, make3(0, 0, 0));
         h.planes(h.a).store(h.layout.index(centre, centre), make3(1, 1, 1));  // impulse
-        h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride,
-                                      wideOpenTerms()},
-                         size, size);
+        h.device->launch(
+            AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, wideOpenTerms()}, size,
+            size);
         // Away from the border every pixel has all 25 taps, so the weights sum to 1 and the
         // output at offset (dx, dy) from the impulse is b3[dx] * b3[dy] on the stride lattice.
         for (int y = 2 * stride; y < size - 2 * stride; ++y)

@@ -15,8 +15,7 @@ namespace fs = std::filesystem;
 namespace rtd {
 namespace {
 
-const char* const kScenes[] = {"moving-objects", "camera-pan", "thin-geometry",
-                               "switching-light"};
+const char* const kScenes[] = {"moving-objects", "camera-pan", "thin-geometry", "switching-light"};
 
 struct SceneRun {
     std::vector<Frame> frames;
@@ -25,10 +24,12 @@ struct SceneRun {
     std::map<std::string, metrics::SequenceMetrics> scores;
 };
 
-DenoiserSettings settingsFor(Method method) { return test::cpuSettings(method); }
+DenoiserSettings settingsFor(Method method) {
+    return test::cpuSettings(method);
+}
 
 class Quality : public ::testing::Test {
-protected:
+  protected:
     static void SetUpTestSuite() {
         test::TempFolder folder("quality");
         render::RenderSettings r;
@@ -43,9 +44,9 @@ protected:
             Sequence sequence(dir);
             for (int i = 0; i < sequence.frameCount(); ++i) {
                 run.frames.push_back(sequence.readFrame(i));
-                run.references.push_back(readExr(
-                    dir / "reference" / ("reference_" + std::to_string(i) + ".exr"),
-                    {{"R"}, {"G"}, {"B"}}));
+                run.references.push_back(
+                    readExr(dir / "reference" / ("reference_" + std::to_string(i) + ".exr"),
+                            {{"R"}, {"G"}, {"B"}}));
                 run.outputs["input"].push_back(run.frames.back().beauty);
             }
             for (Method m : {Method::Atrous, Method::Temporal, Method::Svgf}) {
@@ -61,8 +62,8 @@ protected:
                 run.outputs["temporal-k3"].push_back(denoiser.processFrame(f));
             for (auto& [name, images] : run.outputs)
                 run.scores[name] = metrics::compareSequence(images, run.references);
-            std::printf("%-16s %-9s %10s %8s %7s %9s\n", scene, "method", "relMSE", "PSNR",
-                        "SSIM", "temporal");
+            std::printf("%-16s %-9s %10s %8s %7s %9s\n", scene, "method", "relMSE", "PSNR", "SSIM",
+                        "temporal");
             for (auto& [name, s] : run.scores)
                 std::printf("%-16s %-9s %10.5f %8.2f %7.4f %9.5f\n", "", name.c_str(),
                             s.mean.relMse, s.mean.psnr, s.mean.ssim,

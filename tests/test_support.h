@@ -2,15 +2,16 @@
 // down +z, fronto-parallel surfaces, per-pixel IDs and colours from callbacks.
 #pragma once
 
-#include <array>
-#include <cstdio>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <random>
 #include <string>
-#include <unistd.h>
 
 #include "rtdenoise/rtdenoise.h"
 
@@ -37,7 +38,9 @@ inline Matrix4 translation(float x, float y, float z) {
 }
 
 // World x offset that moves a point at depth z by `pixels` pixels on screen.
-inline float worldShiftForPixels(float pixels, float z) { return pixels * z / kFocal; }
+inline float worldShiftForPixels(float pixels, float z) {
+    return pixels * z / kFocal;
+}
 
 struct SceneDescription {
     int width = 32;
@@ -99,7 +102,7 @@ inline DenoiserSettings cpuSettings(Method method) {
 
 // A fresh empty folder under the system temp folder, removed with the object.
 class TempFolder {
-public:
+  public:
     explicit TempFolder(const std::string& name)
         : path_(std::filesystem::temp_directory_path() /
                 ("rtdenoise-test-" + name + "-" + std::to_string(::getpid()))) {
@@ -112,7 +115,7 @@ public:
     }
     const std::filesystem::path& path() const { return path_; }
 
-private:
+  private:
     std::filesystem::path path_;
 };
 
@@ -135,7 +138,9 @@ inline CliResult runCli(const std::string& arguments, const std::string& environ
 }
 
 // A path quoted for the shell command line above.
-inline std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+inline std::string quoted(const std::filesystem::path& p) {
+    return "'" + p.string() + "'";
+}
 
 inline std::filesystem::path boxFolder() {
     return std::filesystem::path(RTD_SHARED_DIR) / "data" / "box";

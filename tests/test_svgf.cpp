@@ -10,7 +10,9 @@
 namespace rtd {
 namespace {
 
-SvgfTerms paperTerms() { return {1.0f, 128.0f, 4.0f, 1}; }
+SvgfTerms paperTerms() {
+    return {1.0f, 128.0f, 4.0f, 1};
+}
 
 TEST(SvgfKernels, VarianceIsPropagatedWithSquaredWeights) {
     // Flat wall, constant illumination (luminance term 0), constant variance v: every weight is
@@ -80,8 +82,8 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
     // 5y + 2.5, 5, 5), i.e. pixel centre (x + 0.5, y + 0.5) at depth w = 5 (a static camera).
     identity.currentWorldToPreviousScreen =
         Mat4{{{5, 0, 0, 2.5f}, {0, 5, 0, 2.5f}, {0, 0, 1, 0}, {0, 0, 1, 0}}};
-    identity.currentWorldToPreviousWorld = Mat4{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0},
-                                                 {0, 0, 0, 1}}};
+    identity.currentWorldToPreviousWorld =
+        Mat4{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
     identity.valid = 1;
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> noise(-0.5f, 0.5f);
@@ -94,15 +96,27 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
                 h.planes(h.a).store(h.layout.index(x, y), make3(v, v, v));
             }
         PreviousGeometry previous{h.ids.data(), h.depth.data(), h.planes(h.normal)};
-        h.device->launch(
-            SvgfTemporalKernel{h.gbuffer(), previous, &identity, h.planeSet(derivatives),
-                               HistoryTest{1, 10.0f, 16.0f}, h.planes(h.a), h.sumPlanes(), 3,
-                               0.0f,
-                               h.planeSet(illumination[prev]), h.planeSet(moments[prev]),
-                               length[prev].data(), h.planes(illumination[cur]),
-                               h.planeSet(moments[cur]), length[cur].data(), h.validity.data(),
-                               0.0f, 0.0f, 32.0f, n > 1 ? 1 : 0},
-            w, hgt);
+        h.device->launch(SvgfTemporalKernel{h.gbuffer(),
+                                            previous,
+                                            &identity,
+                                            h.planeSet(derivatives),
+                                            HistoryTest{1, 10.0f, 16.0f},
+                                            h.planes(h.a),
+                                            h.sumPlanes(),
+                                            3,
+                                            0.0f,
+                                            h.planeSet(illumination[prev]),
+                                            h.planeSet(moments[prev]),
+                                            length[prev].data(),
+                                            h.planes(illumination[cur]),
+                                            h.planeSet(moments[cur]),
+                                            length[cur].data(),
+                                            h.validity.data(),
+                                            0.0f,
+                                            0.0f,
+                                            32.0f,
+                                            n > 1 ? 1 : 0},
+                         w, hgt);
         double sum = 0, sum2 = 0, varianceEstimate = 0;
         for (int y = 0; y < hgt; ++y)
             for (int x = 0; x < w; ++x) {
@@ -185,8 +199,8 @@ TEST(Svgf, HistoryLengthGrowsAndResetsWhereAnObjectUncoversTheWall) {
         d.id = [left](int x, int) { return x >= left && x < left + 8 ? 0 : 1; };
         d.depth = [left, z](int x, int) { return x >= left && x < left + 8 ? z - 1.0f : z; };
         Frame f = makeFrame(d);
-        f.objectToWorld[0] = test::translation(test::worldShiftForPixels(3.0f * frame, z - 1.0f),
-                                               0, 0);
+        f.objectToWorld[0] =
+            test::translation(test::worldShiftForPixels(3.0f * frame, z - 1.0f), 0, 0);
         return f;
     };
     Denoiser denoiser(svgfSettings());

@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <fstream>
 #include <filesystem>
+#include <fstream>
 #include <future>
 #include <map>
 #include <optional>
@@ -55,8 +55,9 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     if (options.maxFrames > 0) frames = std::min(frames, options.maxFrames);
     prepareOutputFolder(options.output);
     if (!options.video.empty() && !VideoWriter::ffmpegAvailable())
-        throw Error(ErrorCode::MissingTool,
-                    "ffmpeg not found on PATH: install it (apt-get install ffmpeg) or drop --video");
+        throw Error(
+            ErrorCode::MissingTool,
+            "ffmpeg not found on PATH: install it (apt-get install ffmpeg) or drop --video");
 
     Denoiser denoiser(settings);
     if (!options.quiet) {
@@ -119,8 +120,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         nonFinite += stats.nonFiniteReplaced;
 
         std::vector<std::pair<std::string, Image>> debug;
-        if (options.debug && (settings.method == Method::Temporal ||
-                              settings.method == Method::Svgf)) {
+        if (options.debug &&
+            (settings.method == Method::Temporal || settings.method == Method::Svgf)) {
             debug.emplace_back("reprojection", denoiser.debugImage(DebugView::Reprojection));
             if (settings.method == Method::Svgf) {
                 debug.emplace_back("variance", denoiser.debugImage(DebugView::Variance));
@@ -212,8 +213,7 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
                "Pixels of another object ID never contribute to a filtered pixel (on by default)");
     c.add_option("--sigma-coord", s.jbf.sigmaCoord, "[>0] JBF spatial sigma (pixels)")
         ->capture_default_str();
-    c.add_option("--radius", s.jbf.radius, "[0,64] JBF kernel half width")
-        ->capture_default_str();
+    c.add_option("--radius", s.jbf.radius, "[0,64] JBF kernel half width")->capture_default_str();
     c.add_option("--atrous-passes", s.atrous.passes, "[1,10] A-Trous levels (stride 2^i)")
         ->capture_default_str();
     c.add_option("--alpha", s.temporal.alpha, "[0,1] weight of the current frame")
@@ -238,8 +238,7 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
         ->capture_default_str();
     c.add_option("--svgf-sigma-depth", s.svgf.sigmaDepth, "[>0] svgf depth tolerance (sigma_z)")
         ->capture_default_str();
-    c.add_option("--svgf-sigma-normal", s.svgf.sigmaNormal,
-                 "[>0] svgf normal exponent (sigma_n)")
+    c.add_option("--svgf-sigma-normal", s.svgf.sigmaNormal, "[>0] svgf normal exponent (sigma_n)")
         ->capture_default_str();
     c.add_option("--svgf-sigma-luminance", s.svgf.sigmaLuminance,
                  "[>0] svgf luminance tolerance in standard deviations (sigma_l)")
@@ -272,16 +271,17 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
 Command addDenoiseCommand(CLI::App& app) {
     auto options = std::make_shared<DenoiseOptions>();
     auto settings = std::make_shared<DenoiserSettings>();
-    CLI::App* c = app.add_subcommand(
-        "denoise", "Denoise a sequence folder (beauty_i.exr, normal_i.exr, position_i.exr, "
-                   "depth_i.exr, ID_i.exr, matrix_i.mat) into OUT_DIR/result_<i>.exr");
-    c->add_option("--config", options->config,
-                  "Read options from a TOML/INI file: one `key = value` per line, keys are the long "
-                  "option names (e.g. method = \"jbf\", sigma-color = 0.8); flags given on the "
-                  "command line win");
+    CLI::App* c =
+        app.add_subcommand("denoise",
+                           "Denoise a sequence folder (beauty_i.exr, normal_i.exr, position_i.exr, "
+                           "depth_i.exr, ID_i.exr, matrix_i.mat) into OUT_DIR/result_<i>.exr");
+    c->add_option(
+        "--config", options->config,
+        "Read options from a TOML/INI file: one `key = value` per line, keys are the long "
+        "option names (e.g. method = \"jbf\", sigma-color = 0.8); flags given on the "
+        "command line win");
     c->add_option("INPUT_DIR", options->input, "Folder of the input sequence")->required();
-    c->add_option("-o,--output", options->output, "Output folder (created if missing)")
-        ->required();
+    c->add_option("-o,--output", options->output, "Output folder (created if missing)")->required();
     addDenoiserOptions(*c, *settings);
     c->add_flag("--png", options->png, "Also write result_<i>.png (ACES, sRGB)");
     c->add_option("--exposure", options->exposure, "Exposure multiplier before tone mapping")

@@ -8,12 +8,12 @@
 namespace rtd::cli {
 
 class Progress {
-public:
+  public:
     Progress(int total, bool quiet);
     void update(int done);  // `done` frames finished
     void finish();
 
-private:
+  private:
     int total_;
     bool quiet_;
     bool terminal_;

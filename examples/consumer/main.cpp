@@ -20,8 +20,8 @@ int main() {
     frame.objectId.assign(std::size_t(width) * height, 0);  // one object, K = 1
     frame.objectToWorld = {rtd::Matrix4::identity()};
     // Pinhole camera at the origin looking down +z, focal length 64 pixels (s.w = depth).
-    frame.worldToScreen.m = {{{64, 0, width / 2.0f, 0}, {0, 64, height / 2.0f, 0}, {0, 0, 1, 0},
-                              {0, 0, 1, 0}}};
+    frame.worldToScreen.m = {
+        {{64, 0, width / 2.0f, 0}, {0, 64, height / 2.0f, 0}, {0, 0, 1, 0}, {0, 0, 1, 0}}};
     std::mt19937 rng(1);
     std::uniform_real_distribution<float> noise(0.0f, 1.0f);
     double inputMean = 0, outputMean = 0;

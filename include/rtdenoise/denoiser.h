@@ -43,7 +43,7 @@ enum class DebugView {
 };
 
 class Denoiser {
-public:
+  public:
     explicit Denoiser(const DenoiserSettings& settings = {});
     ~Denoiser();
     Denoiser(Denoiser&&) noexcept;
@@ -67,7 +67,7 @@ public:
     Image debugImage(DebugView view) const;
     Image reprojectionDebugImage() const { return debugImage(DebugView::Reprojection); }
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -21,7 +21,9 @@ struct Image {
         : width(w), height(h), channels(c), pixels(std::size_t(w) * h * c, fill) {}
 
     std::size_t pixelCount() const { return std::size_t(width) * height; }
-    float& at(int x, int y, int c = 0) { return pixels[(std::size_t(y) * width + x) * channels + c]; }
+    float& at(int x, int y, int c = 0) {
+        return pixels[(std::size_t(y) * width + x) * channels + c];
+    }
     float at(int x, int y, int c = 0) const {
         return pixels[(std::size_t(y) * width + x) * channels + c];
     }

@@ -31,7 +31,7 @@ void writeMatrixFile(const std::filesystem::path& file, const MatrixFile& matric
 // A folder in the course layout: beauty_i.exr, normal_i.exr, position_i.exr, depth_i.exr,
 // ID_i.exr, matrix_i.mat, optional albedo_i.exr, for i = 0..frameCount-1.
 class Sequence {
-public:
+  public:
     // Discovers the frame count from beauty_<i>.exr; throws if none, or on a gap in the numbering.
     explicit Sequence(std::filesystem::path folder);
 
@@ -41,7 +41,7 @@ public:
     // Reads and validates frame i: all buffers the same size, IDs in -1..K-1.
     Frame readFrame(int index) const;
 
-private:
+  private:
     std::filesystem::path folder_;
     int frameCount_ = 0;
 };
@@ -70,7 +70,7 @@ Image toneMap(const Image& linear, float exposure = 1.0f);
 // Encodes frames to an H.264 MP4 through the `ffmpeg` program. Frames are tone-mapped images
 // ([0,1], 3 channels) of one size. Throws MissingTool if ffmpeg is not on PATH.
 class VideoWriter {
-public:
+  public:
     VideoWriter(std::filesystem::path file, int width, int height, int framesPerSecond = 24);
     ~VideoWriter();  // abandons an unfinished video (the temporary file is removed)
     VideoWriter(const VideoWriter&) = delete;
@@ -81,7 +81,7 @@ public:
 
     static bool ffmpegAvailable();
 
-private:
+  private:
     std::filesystem::path file_;
     std::filesystem::path tempFile_;
     int width_, height_;

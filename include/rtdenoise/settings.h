@@ -44,9 +44,9 @@ struct OutlierSettings {
 
 // Which previous-frame pixels may serve as history (temporal and svgf methods).
 struct HistorySettings {
-    bool geometryTests = true;     // also require depth and normal to agree (else: object ID only)
-    float depthTolerance = 10.0f;  // [>0] reject if |dz| > tolerance * (fwidth(z) + 0.01)
-    float normalTolerance = 16.0f; // [>0] reject if |dn| > tolerance * (fwidth(n) + 0.01)
+    bool geometryTests = true;      // also require depth and normal to agree (else: object ID only)
+    float depthTolerance = 10.0f;   // [>0] reject if |dz| > tolerance * (fwidth(z) + 0.01)
+    float normalTolerance = 16.0f;  // [>0] reject if |dn| > tolerance * (fwidth(n) + 0.01)
 };
 
 struct SvgfSettings {
@@ -75,9 +75,9 @@ struct AlbedoSettings {
 
 struct TemporalSettings {
     SpatialFilter spatialFilter = SpatialFilter::Atrous;  // filter applied before accumulation
-    float alpha = 0.2f;    // [0, 1] weight of the current frame (1 where history is invalid)
-    float clampK = 1.0f;   // [>0] history clamped to mu +- k sigma of the current neighbourhood
-    int clampRadius = 3;   // [1, 15] neighbourhood half width for mu and sigma (3 -> 7x7)
+    float alpha = 0.2f;   // [0, 1] weight of the current frame (1 where history is invalid)
+    float clampK = 1.0f;  // [>0] history clamped to mu +- k sigma of the current neighbourhood
+    int clampRadius = 3;  // [1, 15] neighbourhood half width for mu and sigma (3 -> 7x7)
 };
 
 struct DenoiserSettings {

@@ -19,11 +19,3 @@
 #else
 #define RTD_UNROLL _Pragma("GCC unroll 16")
 #endif
-
-// Vectorise the next loop without interleaving several vector iterations: the filters keep four
-// running sums, and interleaving them spills registers.
-#if defined(__clang__) && !defined(__CUDACC__)
-#define RTD_VECTORIZE _Pragma("clang loop vectorize(enable) interleave_count(1)")
-#else
-#define RTD_VECTORIZE
-#endif

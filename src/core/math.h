@@ -14,14 +14,18 @@ struct Float3 {
     float x = 0.0f, y = 0.0f, z = 0.0f;
 };
 
-RTD_HOST_DEVICE RTD_INLINE Float3 make3(float x, float y, float z) { return Float3{x, y, z}; }
+RTD_HOST_DEVICE RTD_INLINE Float3 make3(float x, float y, float z) {
+    return Float3{x, y, z};
+}
 RTD_HOST_DEVICE RTD_INLINE Float3 operator+(Float3 a, Float3 b) {
     return {a.x + b.x, a.y + b.y, a.z + b.z};
 }
 RTD_HOST_DEVICE RTD_INLINE Float3 operator-(Float3 a, Float3 b) {
     return {a.x - b.x, a.y - b.y, a.z - b.z};
 }
-RTD_HOST_DEVICE RTD_INLINE Float3 operator*(Float3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
+RTD_HOST_DEVICE RTD_INLINE Float3 operator*(Float3 a, float s) {
+    return {a.x * s, a.y * s, a.z * s};
+}
 RTD_HOST_DEVICE RTD_INLINE Float3 operator*(Float3 a, Float3 b) {
     return {a.x * b.x, a.y * b.y, a.z * b.z};
 }
@@ -31,19 +35,31 @@ RTD_HOST_DEVICE RTD_INLINE Float3& operator+=(Float3& a, Float3 b) {
     a.z += b.z;
     return a;
 }
-RTD_HOST_DEVICE RTD_INLINE float dot(Float3 a, Float3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-RTD_HOST_DEVICE RTD_INLINE float square(float v) { return v * v; }
+RTD_HOST_DEVICE RTD_INLINE float dot(Float3 a, Float3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+RTD_HOST_DEVICE RTD_INLINE float square(float v) {
+    return v * v;
+}
 RTD_HOST_DEVICE RTD_INLINE Float3 normalize(Float3 v) {
     float length2 = dot(v, v);
     return length2 > 0.0f ? v * (1.0f / std::sqrt(length2)) : v;
 }
-RTD_HOST_DEVICE RTD_INLINE float minf(float a, float b) { return a < b ? a : b; }
-RTD_HOST_DEVICE RTD_INLINE float maxf(float a, float b) { return a > b ? a : b; }
+RTD_HOST_DEVICE RTD_INLINE float minf(float a, float b) {
+    return a < b ? a : b;
+}
+RTD_HOST_DEVICE RTD_INLINE float maxf(float a, float b) {
+    return a > b ? a : b;
+}
 RTD_HOST_DEVICE RTD_INLINE float clampf(float v, float lo, float hi) {
     return minf(maxf(v, lo), hi);
 }
-RTD_HOST_DEVICE RTD_INLINE int mini(int a, int b) { return a < b ? a : b; }
-RTD_HOST_DEVICE RTD_INLINE int maxi(int a, int b) { return a > b ? a : b; }
+RTD_HOST_DEVICE RTD_INLINE int mini(int a, int b) {
+    return a < b ? a : b;
+}
+RTD_HOST_DEVICE RTD_INLINE int maxi(int a, int b) {
+    return a > b ? a : b;
+}
 RTD_HOST_DEVICE RTD_INLINE Float3 clamp3(Float3 v, Float3 lo, Float3 hi) {
     return {clampf(v.x, lo.x, hi.x), clampf(v.y, lo.y, hi.y), clampf(v.z, lo.z, hi.z)};
 }
@@ -58,8 +74,8 @@ RTD_HOST_DEVICE RTD_INLINE bool isFinite(float v) {
 }
 
 // e^x for x <= 0 (the filters' weights): 2^t = 2^floor(t) * p(frac(t)), p a degree-5
-// near-minimax fit of 2^f on [0,1) with p(0) = 1 (relative error 8e-8); rounding x * log2(e) adds up to 1e-5
-// relative at large |x|. Results under 2^-126 flush to 0.
+// near-minimax fit of 2^f on [0,1) with p(0) = 1 (relative error 8e-8); rounding x * log2(e) adds
+// up to 1e-5 relative at large |x|. Results under 2^-126 flush to 0.
 RTD_HOST_DEVICE RTD_INLINE float expNegative(float x) {
 #if defined(__CUDA_ARCH__)
     return __expf(x);

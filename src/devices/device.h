@@ -12,7 +12,7 @@
 namespace rtd {
 
 class Device {
-public:
+  public:
     virtual ~Device() = default;
     virtual std::string name() const = 0;
     // True if kernels can read and write host memory directly (no staging copies needed).
@@ -40,7 +40,7 @@ std::unique_ptr<Device> createCpuDevice();
 // An array of T in a device's memory, freed with its owner.
 template <class T>
 class DeviceBuffer {
-public:
+  public:
     DeviceBuffer() = default;
     DeviceBuffer(Device& device, std::size_t count)
         : device_(&device),
@@ -69,7 +69,7 @@ public:
     std::size_t size() const { return count_; }
     std::size_t bytes() const { return count_ * sizeof(T); }
 
-private:
+  private:
     Device* device_ = nullptr;
     T* data_ = nullptr;
     std::size_t count_ = 0;

@@ -29,8 +29,8 @@ struct AccumulateKernel {
             return;
         }
         ColorWindowStats w = colorWindowStats(rowSums, i, L.pitch, radius);
-        Float3 history = clamp3(reprojected.load(i), w.mean - w.sigma * clampK,
-                                w.mean + w.sigma * clampK);
+        Float3 history =
+            clamp3(reprojected.load(i), w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
         out.store(i, c * alpha + history * (1.0f - alpha));
     }
 };

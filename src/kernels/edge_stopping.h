@@ -10,9 +10,9 @@ namespace rtd {
 
 // 1 / (2 sigma^2) for each term, precomputed on the host.
 struct EdgeStoppingTerms {
-    float colorScale;   // 1 / (2 sigma_color^2)
-    float normalScale;  // 1 / (2 sigma_normal^2)
-    float planeScale;   // 1 / (2 sigma_plane^2)
+    float colorScale;     // 1 / (2 sigma_color^2)
+    float normalScale;    // 1 / (2 sigma_normal^2)
+    float planeScale;     // 1 / (2 sigma_plane^2)
     int separateObjects;  // 1: taps on another object ID get weight 0
 };
 
@@ -37,8 +37,7 @@ RTD_HOST_DEVICE RTD_INLINE float edgeStoppingExponent(const EdgeStoppingTerms& t
     // D_plane^2 = (n_i . dp)^2 / |dp|^2: no square root needed.
     float alongNormal = dot(normalI, dp);
     float dPlane2 = alongNormal * alongNormal / maxf(dot(dp, dp), 1e-20f);
-    return dot(dc, dc) * t.colorScale + dNormal * dNormal * t.normalScale +
-           dPlane2 * t.planeScale;
+    return dot(dc, dc) * t.colorScale + dNormal * dNormal * t.normalScale + dPlane2 * t.planeScale;
 }
 
 }  // namespace rtd

@@ -31,7 +31,6 @@ struct JbfKernel {
             int row = i + L.offset(0, dy);
             float dy2 = float(dy * dy);
             // Branch-free inner loop (border and background taps get weight 0): vectorises.
-            RTD_VECTORIZE
             for (int dx = -radius; dx <= radius; ++dx) {
                 int j = row + dx;
                 Float3 cj = in.load(j);

@@ -12,18 +12,18 @@
 #include "kernels/svgf.h"
 #include "kernels/window_sums.h"
 
-#define RTD_FOR_EACH_KERNEL(X) \
-    X(IngestKernel)            \
-    X(PackKernel)              \
-    X(LuminanceRowSumsKernel)  \
-    X(ColorRowSumsKernel)      \
-    X(OutlierKernel)           \
-    X(JbfKernel)               \
-    X(AtrousKernel)            \
+#define RTD_FOR_EACH_KERNEL(X)   \
+    X(IngestKernel)              \
+    X(PackKernel)                \
+    X(LuminanceRowSumsKernel)    \
+    X(ColorRowSumsKernel)        \
+    X(OutlierKernel)             \
+    X(JbfKernel)                 \
+    X(AtrousKernel)              \
     X(GeometryDerivativesKernel) \
-    X(ReprojectKernel)         \
-    X(AccumulateKernel)        \
-    X(SvgfTemporalKernel)      \
-    X(SvgfVarianceKernel)      \
-    X(SvgfAtrousKernel)        \
+    X(ReprojectKernel)           \
+    X(AccumulateKernel)          \
+    X(SvgfTemporalKernel)        \
+    X(SvgfVarianceKernel)        \
+    X(SvgfAtrousKernel)          \
     X(ModulateKernel)

@@ -143,9 +143,7 @@ struct GeometryDerivativesKernel {
     }
     RTD_HOST_DEVICE RTD_INLINE float normalChange(int i, int step) const {
         std::int32_t id = g.objectId[i];
-        int j = g.objectId[i + step] == id ? i + step
-                : g.objectId[i - step] == id ? i - step
-                                             : i;
+        int j = g.objectId[i + step] == id ? i + step : g.objectId[i - step] == id ? i - step : i;
         Float3 d = g.normal.load(j) - g.normal.load(i);
         return std::sqrt(dot(d, d));
     }
@@ -171,15 +169,14 @@ struct ReprojectKernel {
     const ObjectReprojection* objects;  // one per object ID of the current frame
     PlaneSet derivatives;
     HistoryTest test;
-    Planes3 history;      // previous frame's output
-    Planes3 reprojected;  // history sampled at each current pixel
+    Planes3 history;         // previous frame's output
+    Planes3 reprojected;     // history sampled at each current pixel
     std::uint8_t* validity;  // ReprojectionCode per pixel
     int hasHistory;          // 0 on the first frame: nothing to reproject
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         int i = g.layout.index(x, y);
-        HistoryTaps taps =
-            findHistory(g, i, previous, objects, derivatives, test, 0, hasHistory);
+        HistoryTaps taps = findHistory(g, i, previous, objects, derivatives, test, 0, hasHistory);
         Float3 sum;
         for (int t = 0; t < taps.count; ++t) sum += history.load(taps.index[t]) * taps.weight[t];
         reprojected.store(i, sum);

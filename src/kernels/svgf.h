@@ -50,7 +50,7 @@ struct SvgfTemporalKernel {
     Planes3 radiance;  // noisy input, demodulated by the ingest, after firefly removal
     PlaneSet rowSums;  // ColorRowSumsKernel over `radiance`: the anti-lag clamp's window
     int clampRadius;
-    float clampK;      // 0: no clamp (the paper); else history clamped to mu +- k sigma
+    float clampK;  // 0: no clamp (the paper); else history clamped to mu +- k sigma
     PlaneSet previousIllumination;  // rgb (+ variance, unused here): last frame's feedback
     PlaneSet previousMoments;       // 2 planes
     const float* previousLength;
@@ -107,9 +107,9 @@ struct SvgfTemporalKernel {
             float meanL = luminance(w.mean);
             float standardError = luminance(w.sigma) / std::sqrt(w.count);
             float historyL = luminance(history);
-            float gap = maxf((historyL > meanL ? historyL - meanL : meanL - historyL) -
-                                 3.0f * standardError,
-                             0.0f);
+            float gap = maxf(
+                (historyL > meanL ? historyL - meanL : meanL - historyL) - 3.0f * standardError,
+                0.0f);
             float change = minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f);
             h *= square(square(1.0f - change));
             history = clamp3(history, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
@@ -158,9 +158,9 @@ struct SvgfVarianceKernel {
             for (int dx = -radius; dx <= radius; ++dx) {
                 int j = i + L.offset(dx, dy);
                 Float3 cj = illumination.load(j);
-                float logW = svgfLogWeight(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy),
-                                           nI, g.normal.load(j), lI, luminance(cj),
-                                           terms.sigmaLuminance);
+                float logW =
+                    svgfLogWeight(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy), nI,
+                                  g.normal.load(j), lI, luminance(cj), terms.sigmaLuminance);
                 float w = svgfTapMask(terms, id, g.objectId[j]) * expNegative(minf(logW, 0.0f));
                 sum += cj * w;
                 m1 += moments.at(0, j) * w;
@@ -199,7 +199,7 @@ struct SvgfAtrousKernel {
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
                 int j = i + L.offset(dx, dy);
-                float k = (dx == 0 && dy == 0) ? kGauss[0]
+                float k = (dx == 0 && dy == 0)   ? kGauss[0]
                           : (dx == 0 || dy == 0) ? kGauss[1]
                                                  : 0.0625f;
                 float m = g.objectId[j] >= 0 ? k : 0.0f;
@@ -220,8 +220,9 @@ struct SvgfAtrousKernel {
                 int ox = (tx - 2) * stride, oy = (ty - 2) * stride;
                 int j = i + L.offset(ox, oy);
                 Float3 cj = in.rgb().load(j);
-                float logW = svgfLogWeight(terms, zI, g.depth[j], dzdx * float(ox) + dzdy * float(oy),
-                                           nI, g.normal.load(j), lI, luminance(cj), phiLuminance);
+                float logW =
+                    svgfLogWeight(terms, zI, g.depth[j], dzdx * float(ox) + dzdy * float(oy), nI,
+                                  g.normal.load(j), lI, luminance(cj), phiLuminance);
                 float w = svgfTapMask(terms, id, g.objectId[j]) * (kB3[tx] * kB3[ty]) *
                           expNegative(minf(logW, 0.0f));
                 sum += cj * w;

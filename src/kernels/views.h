@@ -63,6 +63,8 @@ struct GBufferView {
 };
 
 // 1 for a pixel that holds an object, 0 for background or border (a multiplier, not a branch).
-RTD_HOST_DEVICE RTD_INLINE float foregroundMask(std::int32_t id) { return id >= 0 ? 1.0f : 0.0f; }
+RTD_HOST_DEVICE RTD_INLINE float foregroundMask(std::int32_t id) {
+    return id >= 0 ? 1.0f : 0.0f;
+}
 
 }  // namespace rtd

@@ -72,7 +72,7 @@ struct ColorWindowStats {
 };
 
 RTD_HOST_DEVICE RTD_INLINE ColorWindowStats colorWindowStats(const PlaneSet& rowSums, int i,
-                                                            int pitch, int radius) {
+                                                             int pitch, int radius) {
     ColorWindowStats s;
     s.count = maxf(columnSum(rowSums, 0, i, pitch, radius), 1.0f);
     float inv = 1.0f / s.count;

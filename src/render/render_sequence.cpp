@@ -132,7 +132,6 @@ void removeStaleFrames(const fs::path& folder, int frames) {
     }
 }
 
-
 }  // namespace
 
 std::vector<SceneInfo> listScenes() {

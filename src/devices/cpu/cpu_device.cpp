@@ -12,7 +12,7 @@ namespace rtd {
 namespace {
 
 class CpuDevice final : public Device {
-public:
+  public:
     std::string name() const override {
         return "cpu (" + std::to_string(omp_get_max_threads()) + " threads)";
     }
@@ -41,7 +41,7 @@ public:
         return total;
     }
 
-#define RTD_DEFINE_LAUNCH(K) \
+#define RTD_DEFINE_LAUNCH(K)                                       \
     void launch(const K& kernel, int width, int height) override { \
         parallelFor2D(width, height, kernel);                      \
     }
@@ -51,6 +51,8 @@ public:
 
 }  // namespace
 
-std::unique_ptr<Device> createCpuDevice() { return std::make_unique<CpuDevice>(); }
+std::unique_ptr<Device> createCpuDevice() {
+    return std::make_unique<CpuDevice>();
+}
 
 }  // namespace rtd
