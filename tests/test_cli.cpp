@@ -149,3 +149,26 @@ TEST(Cli, WritesAVideoWhenFfmpegIsThere) {
 
 }  // namespace
 }  // namespace rtd
+
+namespace rtd {
+namespace {
+
+TEST(Cli, BenchReportsEveryCaseAsTableAndJson) {
+    test::TempFolder dir("cli-bench");
+    Result r = runCli(
+        "bench --size 64x48 --method atrous svgf --frames 3 --input-frames 2 "
+        "--cache " +
+        quoted(dir.path() / "cache") + " --json " + quoted(dir.path() / "bench.json"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("machine:"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("svgf-temporal"), std::string::npos) << r.output;  // per pass
+    std::ifstream in(dir.path() / "bench.json");
+    std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(json.find("\"method\": \"atrous\""), std::string::npos) << json;
+    EXPECT_NE(json.find("\"method\": \"svgf\""), std::string::npos) << json;
+    EXPECT_NE(json.find("\"width\": 64, \"height\": 48"), std::string::npos) << json;
+    EXPECT_NE(runCli("bench --size 64by48").exitCode, 0);  // a bad size is an error
+}
+
+}  // namespace
+}  // namespace rtd

@@ -17,6 +17,7 @@ struct Command {
 Command addDenoiseCommand(CLI::App& app);
 Command addRenderCommand(CLI::App& app);
 Command addCompareCommand(CLI::App& app);
+Command addBenchCommand(CLI::App& app);
 
 // Sets the options of `command` not given on its command line from a TOML/INI file whose keys
 // are the long option names; throws rtd::Error naming the file for an unknown key or bad value.

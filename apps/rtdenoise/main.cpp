@@ -14,7 +14,8 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "rtdenoise 0.1.0");
     std::vector<rtd::cli::Command> commands{rtd::cli::addDenoiseCommand(app),
                                             rtd::cli::addRenderCommand(app),
-                                            rtd::cli::addCompareCommand(app)};
+                                            rtd::cli::addCompareCommand(app),
+                                            rtd::cli::addBenchCommand(app)};
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

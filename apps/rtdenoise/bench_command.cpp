@@ -1,0 +1,192 @@
+// `rtdenoise bench`: ms per frame and per pass of each method on each device and size, inputs
+// rendered by the project's renderer (G-buffers and 1-spp beauty, no reference) or read from a
+// sequence folder. Reading frames from disk and host<->device copies are reported apart from
+// the denoising itself. Output: a table, and JSON with --json.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <thread>
+
+#include "commands.h"
+#include "render/render_sequence.h"
+#include "rtdenoise/rtdenoise.h"
+
+namespace fs = std::filesystem;
+
+namespace rtd::cli {
+namespace {
+
+struct BenchOptions {
+    std::vector<std::string> methods{"jbf", "atrous", "temporal", "svgf"};
+    std::vector<std::string> devices{"cpu"};
+    std::vector<std::string> sizes{"512x512", "1280x720", "1920x1080", "3840x2160"};
+    int frames = 20;      // timed frames per case, after a warm-up over the distinct inputs
+    int inputFrames = 4;  // distinct frames rendered (cycled)
+    std::string scene = "moving-objects";
+    fs::path input;  // a sequence folder instead of rendered frames
+    fs::path json;
+    fs::path cache;  // where rendered inputs are kept (default: a temporary folder)
+};
+
+struct Timing {
+    std::vector<double> frame, upload, download;
+    std::vector<std::vector<double>> passes;
+};
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    std::size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+double minimum(const std::vector<double>& v) {
+    return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end());
+}
+
+std::string cpuModel() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+    return "unknown CPU";
+}
+
+std::pair<int, int> parseSize(const std::string& text) {
+    int w = 0, h = 0;
+    char x = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w <= 0 || h <= 0)
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("--size {}: expected WIDTHxHEIGHT, e.g. 1920x1080", text));
+    return {w, h};
+}
+
+const std::map<std::string, Method> kBenchMethods{{"jbf", Method::Jbf},
+                                                  {"atrous", Method::Atrous},
+                                                  {"temporal", Method::Temporal},
+                                                  {"svgf", Method::Svgf}};
+const std::map<std::string, DeviceType> kBenchDevices{
+    {"cpu", DeviceType::Cpu}, {"cuda", DeviceType::Cuda}, {"auto", DeviceType::Auto}};
+
+int runBench(const BenchOptions& o) {
+    fmt::print("machine: {}, {} hardware threads; GPU: none in this build\n", cpuModel(),
+               std::thread::hardware_concurrency());
+    fs::path cache = o.cache.empty() ? fs::temp_directory_path() / "rtdenoise-bench" : o.cache;
+    std::string json = "{\"cases\": [";
+    bool firstCase = true;
+    std::vector<std::string> sizes = o.input.empty() ? o.sizes : std::vector<std::string>{"input"};
+    for (const std::string& sizeText : sizes) {
+        // Inputs: read once (timed apart), then reused for every method and device.
+        fs::path folder = o.input;
+        if (folder.empty()) {
+            auto [w, h] = parseSize(sizeText);
+            folder = cache / fmt::format("{}-{}x{}-{}", o.scene, w, h, o.inputFrames);
+            if (!fs::exists(folder / fmt::format("matrix_{}.mat", o.inputFrames - 1))) {
+                render::RenderSettings r;
+                r.width = w;
+                r.height = h;
+                r.frames = o.inputFrames;
+                r.gbufferOnly = true;
+                fmt::print("rendering {} frames of {} at {} into {}\n", o.inputFrames, o.scene,
+                           sizeText, folder.string());
+                render::renderSequence(o.scene, r, folder);
+            }
+        }
+        Sequence sequence(folder);
+        std::vector<Frame> frames;
+        auto readStart = std::chrono::steady_clock::now();
+        int count = o.input.empty() ? o.inputFrames : std::min(sequence.frameCount(), 8);
+        for (int i = 0; i < count; ++i) frames.push_back(sequence.readFrame(i));
+        double readMs =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - readStart)
+                .count() /
+            count;
+        int width = frames[0].width(), height = frames[0].height();
+        double megapixels = double(width) * height / 1e6;
+        fmt::print("\n{}x{}: reading a frame from disk {:.1f} ms (not in the figures below)\n",
+                   width, height, readMs);
+        fmt::print("{:<9} {:<5} {:>10} {:>10} {:>9} {:>9} {:>10}\n", "method", "dev", "median ms",
+                   "min ms", "upload", "download", "Mpix/s");
+        for (const std::string& methodName : o.methods)
+            for (const std::string& deviceName : o.devices) {
+                DenoiserSettings settings;
+                settings.method = kBenchMethods.at(methodName);
+                settings.device = kBenchDevices.at(deviceName);
+                Denoiser denoiser(settings);
+                Image output;
+                for (const Frame& f : frames) denoiser.processFrame(f, output);  // warm-up
+                Timing t;
+                t.passes.resize(denoiser.passes().size());
+                for (int i = 0; i < o.frames; ++i) {
+                    auto start = std::chrono::steady_clock::now();
+                    denoiser.processFrame(frames[std::size_t(i) % frames.size()], output);
+                    double total = std::chrono::duration<double, std::milli>(
+                                       std::chrono::steady_clock::now() - start)
+                                       .count();
+                    const FrameStats& s = denoiser.lastFrameStats();
+                    t.upload.push_back(s.uploadMilliseconds);
+                    t.download.push_back(s.downloadMilliseconds);
+                    // The denoising itself: everything but the copies in and out.
+                    t.frame.push_back(total - s.uploadMilliseconds - s.downloadMilliseconds);
+                    for (std::size_t p = 0; p < t.passes.size(); ++p)
+                        t.passes[p].push_back(s.passMilliseconds[p]);
+                }
+                double med = median(t.frame);
+                fmt::print("{:<9} {:<5} {:>10.2f} {:>10.2f} {:>9.2f} {:>9.2f} {:>10.1f}\n",
+                           methodName, deviceName, med, minimum(t.frame), median(t.upload),
+                           median(t.download), megapixels / (med / 1000.0));
+                std::string passes;
+                for (std::size_t p = 0; p < t.passes.size(); ++p) {
+                    fmt::print("    {:<16} {:8.3f} ms\n", denoiser.passes()[p].name,
+                               median(t.passes[p]));
+                    passes += fmt::format("{}\"{}\": {:.4f}", p ? ", " : "",
+                                          denoiser.passes()[p].name, median(t.passes[p]));
+                }
+                json += fmt::format(
+                    "{}\n  {{\"method\": \"{}\", \"device\": \"{}\", \"device_name\": \"{}\", "
+                    "\"width\": {}, \"height\": {}, \"frames\": {}, \"median_ms\": {:.4f}, "
+                    "\"min_ms\": {:.4f}, \"upload_ms\": {:.4f}, \"download_ms\": {:.4f}, "
+                    "\"read_ms\": {:.4f}, \"mpix_per_s\": {:.2f}, \"passes_ms\": {{{}}}}}",
+                    firstCase ? "" : ",", methodName, deviceName, denoiser.deviceName(), width,
+                    height, o.frames, med, minimum(t.frame), median(t.upload), median(t.download),
+                    readMs, megapixels / (med / 1000.0), passes);
+                firstCase = false;
+            }
+    }
+    json += fmt::format("\n], \"machine\": {{\"cpu\": \"{}\", \"threads\": {}, \"gpu\": null}}}}\n",
+                        cpuModel(), std::thread::hardware_concurrency());
+    if (!o.json.empty()) writeFileAtomically(o.json, json);
+    return 0;
+}
+
+}  // namespace
+
+Command addBenchCommand(CLI::App& app) {
+    auto o = std::make_shared<BenchOptions>();
+    CLI::App* c = app.add_subcommand(
+        "bench", "Median and min ms per frame and per pass of each method, device and size");
+    c->add_option("--method", o->methods, "Methods to time")
+        ->check(CLI::IsMember({"jbf", "atrous", "temporal", "svgf"}))
+        ->capture_default_str();
+    c->add_option("--device", o->devices, "Devices to time")
+        ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+        ->capture_default_str();
+    c->add_option("--size", o->sizes, "Frame sizes WxH (inputs rendered once, then cached)")
+        ->capture_default_str();
+    c->add_option("--frames", o->frames, "Timed frames per case (after a warm-up)")
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
+    c->add_option("--input-frames", o->inputFrames, "Distinct rendered frames, cycled")
+        ->check(CLI::Range(2, 64))
+        ->capture_default_str();
+    c->add_option("--scene", o->scene, "Scene rendered for the inputs")->capture_default_str();
+    c->add_option("--input", o->input, "A sequence folder to use instead of rendered frames");
+    c->add_option("--cache", o->cache, "Folder for rendered inputs (default: the temp folder)");
+    c->add_option("--json", o->json, "Also write the results as JSON");
+    return {c, [o] { return runBench(*o); }};
+}
+
+}  // namespace rtd::cli
