@@ -36,6 +36,9 @@ class Device {
 // Throws rtd::Error(DeviceFailure) if the requested device is not available.
 std::unique_ptr<Device> createDevice(DeviceType type);
 std::unique_ptr<Device> createCpuDevice();
+// Only in builds with the CUDA back end (RTD_HAS_CUDA); throws if no GPU is present.
+std::unique_ptr<Device> createCudaDevice();
+bool cudaDeviceAvailable();
 
 // An array of T in a device's memory, freed with its owner.
 template <class T>

@@ -1,0 +1,110 @@
+// The CUDA back end: the same per-pixel kernel functors as the CPU, launched over a 2-D grid on
+// one stream; device memory from cudaMalloc, copies and fills asynchronous on that stream.
+#include <cuda_runtime.h>
+
+#include <string>
+
+#include "devices/device.h"
+#include "rtdenoise/error.h"
+
+namespace rtd {
+namespace {
+
+void check(cudaError_t status, const char* what) {
+    if (status != cudaSuccess)
+        throw Error(ErrorCode::DeviceFailure,
+                    std::string("cuda: ") + what + ": " + cudaGetErrorString(status));
+}
+
+template <class Kernel>
+__global__ void runKernel2D(Kernel kernel, int width, int height) {
+    int x = int(blockIdx.x * blockDim.x + threadIdx.x);
+    int y = int(blockIdx.y * blockDim.y + threadIdx.y);
+    if (x < width && y < height) kernel(x, y);
+}
+
+__global__ void sumBytesKernel(const std::uint8_t* data, std::size_t n,
+                               unsigned long long* total) {
+    unsigned long long local = 0;
+    for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < n;
+         i += std::size_t(gridDim.x) * blockDim.x)
+        local += data[i];
+    if (local) atomicAdd(total, local);
+}
+
+class CudaDevice final : public Device {
+public:
+    CudaDevice() {
+        check(cudaGetDevice(&device_), "cudaGetDevice");
+        cudaDeviceProp properties{};
+        check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
+        name_ = std::string("cuda (") + properties.name + ")";
+        check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
+        check(cudaMalloc(&counter_, sizeof(unsigned long long)), "cudaMalloc");
+    }
+    ~CudaDevice() override {
+        cudaFree(counter_);
+        cudaStreamDestroy(stream_);
+    }
+
+    std::string name() const override { return name_; }
+    bool sharesHostMemory() const override { return false; }
+
+    void* allocate(std::size_t bytes) override {
+        void* p = nullptr;
+        check(cudaMalloc(&p, bytes == 0 ? 1 : bytes), "cudaMalloc");
+        return p;
+    }
+    void release(void* pointer) noexcept override { cudaFree(pointer); }
+    void copyToDevice(void* dst, const void* src, std::size_t bytes) override {
+        check(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyHostToDevice, stream_), "copy to device");
+    }
+    void copyToHost(void* dst, const void* src, std::size_t bytes) override {
+        check(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost, stream_), "copy to host");
+        synchronize();  // the caller reads `dst` next
+    }
+    void fill(void* dst, int value, std::size_t bytes) override {
+        check(cudaMemsetAsync(dst, value, bytes, stream_), "cudaMemsetAsync");
+    }
+    void synchronize() override { check(cudaStreamSynchronize(stream_), "synchronize"); }
+    long long sumBytes(const std::uint8_t* data, std::size_t n) override {
+        check(cudaMemsetAsync(counter_, 0, sizeof(unsigned long long), stream_), "memset");
+        sumBytesKernel<<<256, 256, 0, stream_>>>(data, n, counter_);
+        check(cudaGetLastError(), "sumBytes");
+        unsigned long long total = 0;
+        copyToHost(&total, counter_, sizeof total);
+        return static_cast<long long>(total);
+    }
+
+#define RTD_DEFINE_LAUNCH(K)                                                           \
+    void launch(const K& kernel, int width, int height) override {                     \
+        dim3 block(32, 8);                                                             \
+        dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y); \
+        runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);               \
+        check(cudaGetLastError(), #K);                                                 \
+    }
+    RTD_FOR_EACH_KERNEL(RTD_DEFINE_LAUNCH)
+#undef RTD_DEFINE_LAUNCH
+
+private:
+    int device_ = 0;
+    std::string name_;
+    cudaStream_t stream_ = nullptr;
+    unsigned long long* counter_ = nullptr;
+};
+
+}  // namespace
+
+bool cudaDeviceAvailable() {
+    int count = 0;
+    return cudaGetDeviceCount(&count) == cudaSuccess && count > 0;
+}
+
+std::unique_ptr<Device> createCudaDevice() {
+    if (!cudaDeviceAvailable())
+        throw Error(ErrorCode::DeviceFailure,
+                    "--device cuda: no CUDA GPU is available (driver missing or no device)");
+    return std::make_unique<CudaDevice>();
+}
+
+}  // namespace rtd
