@@ -21,15 +21,16 @@ struct SvgfTerms {
 
 // ln of the SVGF edge-stopping weight between a centre and a tap:
 //   -|dz| / (sigma_z |grad z . offset| + eps) - |dl| / phiLuminance + sigma_n ln max(0, n.n')
+// (`inversePhiLuminance` = 1 / phiLuminance, computed once per centre pixel).
 RTD_HOST_DEVICE RTD_INLINE float svgfLogWeight(const SvgfTerms& t, float depthI, float depthJ,
                                                float depthAlongOffset, Float3 normalI,
                                                Float3 normalJ, float lumI, float lumJ,
-                                               float phiLuminance) {
+                                               float inversePhiLuminance) {
     float dz = depthI - depthJ;
     float slope = depthAlongOffset < 0 ? -depthAlongOffset : depthAlongOffset;
     float wz = (dz < 0 ? -dz : dz) / (t.sigmaDepth * slope + 1e-3f);
     float dl = lumI - lumJ;
-    float wl = (dl < 0 ? -dl : dl) / phiLuminance;
+    float wl = (dl < 0 ? -dl : dl) * inversePhiLuminance;
     // n.n' <= 0 gives ln(1e-30) * sigma_n: a weight of exactly 0 after the exp.
     float wn = t.sigmaNormal * logPositive(maxf(dot(normalI, normalJ), 1e-30f));
     return wn - wz - wl;
@@ -152,6 +153,7 @@ struct SvgfVarianceKernel {
         float zI = g.depth[i], dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
         Float3 nI = g.normal.load(i);
         float lI = luminance(c);
+        float inverseSigmaLuminance = 1.0f / terms.sigmaLuminance;  // no variance yet
         Float3 sum;
         float m1 = 0.0f, m2 = 0.0f, sumW = 0.0f;
         for (int dy = -radius; dy <= radius; ++dy)
@@ -160,7 +162,7 @@ struct SvgfVarianceKernel {
                 Float3 cj = illumination.load(j);
                 float logW =
                     svgfLogWeight(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy), nI,
-                                  g.normal.load(j), lI, luminance(cj), terms.sigmaLuminance);
+                                  g.normal.load(j), lI, luminance(cj), inverseSigmaLuminance);
                 float w = svgfTapMask(terms, id, g.objectId[j]) * expNegative(minf(logW, 0.0f));
                 sum += cj * w;
                 m1 += moments.at(0, j) * w;
@@ -206,8 +208,9 @@ struct SvgfAtrousKernel {
                 prefiltered += m * in.at(3, j);
                 prefilterW += m;
             }
-        float phiLuminance =
-            terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f;
+        float inversePhiLuminance =
+            1.0f /
+            (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f);
         float zI = g.depth[i], dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
         Float3 nI = g.normal.load(i);
         float lI = luminance(cI);
@@ -222,7 +225,7 @@ struct SvgfAtrousKernel {
                 Float3 cj = in.rgb().load(j);
                 float logW =
                     svgfLogWeight(terms, zI, g.depth[j], dzdx * float(ox) + dzdy * float(oy), nI,
-                                  g.normal.load(j), lI, luminance(cj), phiLuminance);
+                                  g.normal.load(j), lI, luminance(cj), inversePhiLuminance);
                 float w = svgfTapMask(terms, id, g.objectId[j]) * (kB3[tx] * kB3[ty]) *
                           expNegative(minf(logW, 0.0f));
                 sum += cj * w;
