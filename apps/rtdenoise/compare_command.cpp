@@ -41,23 +41,6 @@ fs::path framePath(const fs::path& folder, std::string_view stem, int index) {
     return folder / fmt::format("{}_{}.exr", stem, index);
 }
 
-// The index in "<stem>_<i>.exr", or -1 for any other name (canonical decimal only, as written).
-int frameIndex(const std::string& name, std::string_view stem) {
-    const std::string prefix = std::string(stem) + "_";
-    constexpr std::string_view suffix = ".exr";
-    if (name.size() <= prefix.size() + suffix.size() || !name.starts_with(prefix) ||
-        !name.ends_with(suffix))
-        return -1;
-    const std::string_view digits(name.data() + prefix.size(),
-                                  name.size() - prefix.size() - suffix.size());
-    if ((digits.size() > 1 && digits[0] == '0') ||
-        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
-        return -1;
-    int index = -1;
-    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), index);
-    return ec == std::errc() && end == digits.data() + digits.size() ? index : -1;
-}
-
 void requireFolder(const fs::path& folder, std::string_view role) {
     std::error_code ec;
     const auto status = fs::status(folder, ec);
@@ -67,35 +50,6 @@ void requireFolder(const fs::path& folder, std::string_view role) {
     if (!fs::is_directory(status))
         throw Error(ErrorCode::MissingFile,
                     fmt::format("{}: not a folder ({})", folder.string(), role));
-}
-
-// The number of <stem>_<i>.exr files in `folder`, which must be numbered 0..N-1 without gaps.
-int discoverFrames(const fs::path& folder, std::string_view stem) {
-    std::vector<int> indices;
-    std::error_code ec;
-    for (fs::directory_iterator it(folder, ec); !ec && it != fs::directory_iterator();
-         it.increment(ec)) {
-        const int index = frameIndex(it->path().filename().string(), stem);
-        if (index >= 0) indices.push_back(index);
-    }
-    if (ec)
-        throw Error(ErrorCode::IoFailure,
-                    fmt::format("{}: cannot list: {}", folder.string(), ec.message()));
-    if (indices.empty())
-        throw Error(ErrorCode::MissingFile,
-                    fmt::format("{}: no frames (no {}_<i>.exr files, i = 0, 1, ...)",
-                                folder.string(), stem));
-    std::sort(indices.begin(), indices.end());
-    const int count = int(indices.size());
-    if (indices.back() != count - 1) {
-        int missing = 0;
-        while (indices[missing] == missing) ++missing;
-        throw Error(ErrorCode::InvalidInput,
-                    fmt::format("{} is missing: {} {}_<i>.exr files, the last is {}_{}.exr",
-                                framePath(folder, stem, missing).string(), count, stem, stem,
-                                indices.back()));
-    }
-    return count;
 }
 
 // "dir/reference/" -> "dir": the renderer writes DIR/beauty_i.exr beside DIR/reference/.
@@ -234,7 +188,7 @@ int runCompare(const CompareOptions& options) {
                     fmt::format("--exposure must be finite and > 0, got {}", options.exposure));
     requireFolder(options.results, "RESULT_DIR");
     requireFolder(options.references, "REFERENCE_DIR");
-    const int frameCount = discoverFrames(options.results, "result");
+    const int frameCount = countFrames(options.results, "result");
     // Every result needs its reference: checked up front, before minutes of 4K reading.
     std::error_code ec;
     for (int i = 0; i < frameCount; ++i) {

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rtdenoise/image.h"
@@ -27,6 +28,17 @@ struct MatrixFile {
 };
 MatrixFile readMatrixFile(const std::filesystem::path& file);
 void writeMatrixFile(const std::filesystem::path& file, const MatrixFile& matrices);
+
+// The index i of a file named "<stem>_<i><extension>" (canonical decimal: no sign, no leading
+// zeros), or -1 for any other name.
+int frameIndexOf(const std::string& fileName, std::string_view stem,
+                 std::string_view extension = ".exr");
+
+// The number N of "<stem>_<i><extension>" files in `folder`, which must be numbered 0..N-1:
+// throws MissingFile for a missing folder or no such file, InvalidInput naming the first
+// missing file on a gap.
+int countFrames(const std::filesystem::path& folder, std::string_view stem,
+                std::string_view extension = ".exr");
 
 // A folder in the course layout: beauty_i.exr, normal_i.exr, position_i.exr, depth_i.exr,
 // ID_i.exr, matrix_i.mat, optional albedo_i.exr, for i = 0..frameCount-1.

@@ -27,27 +27,6 @@ const std::vector<std::vector<std::string>> kId = {{"Y", "R", "ID.Y", "id.Y"}};
 // IDs are stored as floats; anything further than this from an integer is a broken file.
 constexpr float kIdTolerance = 1e-3f;
 
-// The index in "beauty_<i>.exr", or -1 when the name is something else. Only the canonical
-// decimal spelling counts (no sign, no leading zeros), since readFrame builds names that way.
-int beautyIndex(const std::string& name) {
-    constexpr std::string_view prefix = "beauty_";
-    constexpr std::string_view suffix = ".exr";
-    if (name.size() <= prefix.size() + suffix.size() || !name.starts_with(prefix) ||
-        !name.ends_with(suffix)) {
-        return -1;
-    }
-    const std::string_view digits(name.data() + prefix.size(),
-                                  name.size() - prefix.size() - suffix.size());
-    if (digits.size() > 1 && digits[0] == '0') return -1;
-    if (!std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
-        return -1;
-    }
-    int index = -1;
-    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), index);
-    if (ec != std::errc() || end != digits.data() + digits.size()) return -1;
-    return index;
-}
-
 // "0..6 and 8..19" for sorted, distinct indices.
 std::string describeRanges(const std::vector<int>& sorted) {
     std::vector<std::string> ranges;
@@ -82,43 +61,59 @@ void requireSameSize(const std::filesystem::path& file, const Image& image,
 
 }  // namespace
 
-Sequence::Sequence(std::filesystem::path folder) : folder_(std::move(folder)) {
+int frameIndexOf(const std::string& name, std::string_view stem, std::string_view extension) {
+    if (name.size() <= stem.size() + 1 + extension.size() || !name.starts_with(stem) ||
+        name[stem.size()] != '_' || !name.ends_with(extension))
+        return -1;
+    const std::string_view digits(name.data() + stem.size() + 1,
+                                  name.size() - stem.size() - 1 - extension.size());
+    if (digits.size() > 1 && digits[0] == '0') return -1;
+    if (!std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+        return -1;
+    int index = -1;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), index);
+    if (ec != std::errc() || end != digits.data() + digits.size()) return -1;
+    return index;
+}
+
+int countFrames(const std::filesystem::path& folder, std::string_view stem,
+                std::string_view extension) {
     std::error_code ec;
-    const auto status = std::filesystem::status(folder_, ec);
-    if (!std::filesystem::exists(status)) {
-        throw Error(ErrorCode::MissingFile, folder_.string() + ": no such folder");
-    }
-    if (!std::filesystem::is_directory(status)) {
-        throw Error(ErrorCode::MissingFile, folder_.string() + ": not a folder");
-    }
+    const auto status = std::filesystem::status(folder, ec);
+    if (!std::filesystem::exists(status))
+        throw Error(ErrorCode::MissingFile, folder.string() + ": no such folder");
+    if (!std::filesystem::is_directory(status))
+        throw Error(ErrorCode::MissingFile, folder.string() + ": not a folder");
 
     std::vector<int> indices;
-    std::filesystem::directory_iterator it(folder_, ec);
+    std::filesystem::directory_iterator it(folder, ec);
     for (; !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
-        const int index = beautyIndex(it->path().filename().string());
+        const int index = frameIndexOf(it->path().filename().string(), stem, extension);
         if (index >= 0) indices.push_back(index);
     }
-    if (ec) {
-        throw Error(ErrorCode::IoFailure, folder_.string() + ": cannot list: " + ec.message());
-    }
-    if (indices.empty()) {
+    if (ec) throw Error(ErrorCode::IoFailure, folder.string() + ": cannot list: " + ec.message());
+    if (indices.empty())
         throw Error(ErrorCode::MissingFile,
-                    folder_.string() + ": no frames (no beauty_<i>.exr files, i = 0, 1, ...)");
-    }
+                    fmt::format("{}: no frames (no {}_<i>{} files, i = 0, 1, ...)", folder.string(),
+                                stem, extension));
     std::sort(indices.begin(), indices.end());
 
     // Names are unique, so the indices are 0..N-1 exactly when the last one is N-1.
-    if (indices.back() != static_cast<int>(indices.size()) - 1) {
+    const int count = static_cast<int>(indices.size());
+    if (indices.back() != count - 1) {
         int missing = 0;
-        while (missing < static_cast<int>(indices.size()) && indices[missing] == missing) {
-            ++missing;
-        }
-        throw Error(ErrorCode::InvalidInput,
-                    (folder_ / ("beauty_" + std::to_string(missing) + ".exr")).string() +
-                        " is missing: frames " + describeRanges(indices) + " exist");
+        while (missing < count && indices[missing] == missing) ++missing;
+        throw Error(
+            ErrorCode::InvalidInput,
+            fmt::format("{} is missing: frames {} exist",
+                        (folder / fmt::format("{}_{}{}", stem, missing, extension)).string(),
+                        describeRanges(indices)));
     }
-    frameCount_ = static_cast<int>(indices.size());
+    return count;
 }
+
+Sequence::Sequence(std::filesystem::path folder)
+    : folder_(std::move(folder)), frameCount_(countFrames(folder_, "beauty")) {}
 
 Frame Sequence::readFrame(int index) const {
     if (index < 0 || index >= frameCount_) {

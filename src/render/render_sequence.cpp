@@ -113,21 +113,15 @@ std::string sceneJson(const SceneDefinition& d, const RenderSettings& s,
 // "<prefix>_<n>.<ext>" of the layout with n >= frames: left from an earlier, longer render they
 // would be read as part of this sequence.
 void removeStaleFrames(const fs::path& folder, int frames) {
-    static const std::string_view kPrefixes[] = {"beauty_", "albedo_", "normal_", "position_",
-                                                 "depth_",  "ID_",     "matrix_", "reference_"};
+    static const std::string_view kStems[] = {"beauty", "albedo", "normal", "position",
+                                              "depth",  "ID",     "matrix", "reference"};
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator(folder, ec)) {
         std::string name = entry.path().filename().string();
-        std::string stem = entry.path().stem().string();
-        std::string ext = entry.path().extension().string();
-        if (ext != ".exr" && ext != ".mat") continue;
-        for (std::string_view prefix : kPrefixes) {
-            if (!stem.starts_with(prefix)) continue;
-            std::string_view digits(stem.data() + prefix.size(), stem.size() - prefix.size());
-            int index = -1;
-            auto [end, err] = std::from_chars(digits.data(), digits.data() + digits.size(), index);
-            if (err == std::errc() && end == digits.data() + digits.size() && index >= frames)
-                fs::remove(entry.path(), ec);
+        for (std::string_view stem : kStems) {
+            int index =
+                std::max(frameIndexOf(name, stem, ".exr"), frameIndexOf(name, stem, ".mat"));
+            if (index >= frames) fs::remove(entry.path(), ec);
         }
     }
 }
