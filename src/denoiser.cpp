@@ -43,6 +43,17 @@ void checkImage(const Image& image, int width, int height, int channels, const c
                                 width, height, channels));
 }
 
+void checkObjectIds(const std::int32_t* ids, int w, int h, int objectCount) {
+    std::size_t n = std::size_t(w) * h;
+    for (std::size_t i = 0; i < n; ++i) {
+        std::int32_t id = ids[i];
+        if (id < -1 || id >= objectCount)
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("frame: object ID {} at pixel ({}, {}) is outside -1..{}", id,
+                                    i % w, i / w, objectCount - 1));
+    }
+}
+
 void checkFrame(const Frame& f) {
     int w = f.width(), h = f.height();
     if (w <= 0 || h <= 0) throw Error(ErrorCode::InvalidInput, "frame: empty beauty image");
@@ -55,14 +66,7 @@ void checkFrame(const Frame& f) {
         throw Error(
             ErrorCode::InvalidInput,
             fmt::format("frame: objectId has {} values, expected {}x{}", f.objectId.size(), w, h));
-    auto objectCount = std::int32_t(f.objectToWorld.size());
-    for (std::size_t i = 0; i < f.objectId.size(); ++i) {
-        std::int32_t id = f.objectId[i];
-        if (id < -1 || id >= objectCount)
-            throw Error(ErrorCode::InvalidInput,
-                        fmt::format("frame: object ID {} at pixel ({}, {}) is outside -1..{}", id,
-                                    i % w, i / w, objectCount - 1));
-    }
+    checkObjectIds(f.objectId.data(), w, h, int(f.objectToWorld.size()));
 }
 
 }  // namespace
@@ -106,6 +110,7 @@ struct Denoiser::Impl {
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
+    int objectCount = 0;  // K of the current frame
 
     // The previous frame's matrices (for back-projection).
     std::vector<Matrix4> previousObjectToWorld;
@@ -259,7 +264,7 @@ struct Denoiser::Impl {
                  "history", "matrices"},
                 {"reprojected", "validity"}, [this] {
                     launch(ReprojectKernel{gbuffer(), previousGeometry(), objects.data(),
-                                           planeSet(derivatives), historyTest(),
+                                           objectCount, planeSet(derivatives), historyTest(),
                                            planes(history[previous()]), planes(reprojected),
                                            validity.data(), hasHistory ? 1 : 0});
                 });
@@ -325,6 +330,7 @@ struct Denoiser::Impl {
                     launch(SvgfTemporalKernel{gbuffer(),
                                               previousGeometry(),
                                               objects.data(),
+                                              objectCount,
                                               planeSet(derivatives),
                                               historyTest(),
                                               planes(*in),
@@ -434,8 +440,9 @@ struct Denoiser::Impl {
     }
 
     // One matrix per object: current world -> object -> previous world (-> previous screen).
-    void uploadObjectMatrices(const Frame& f) {
-        std::size_t count = f.objectToWorld.size();
+    void uploadObjectMatrices(const FrameView& f) {
+        std::size_t count = std::size_t(f.objectCount);
+        objectCount = f.objectCount;
         hostObjects.resize(count);
         for (std::size_t k = 0; k < count; ++k) {
             ObjectReprojection& o = hostObjects[k];
@@ -457,8 +464,8 @@ struct Denoiser::Impl {
                                  count * sizeof(ObjectReprojection));
     }
 
-    void bindInputs(const Frame& f) {
-        frameHasAlbedo = f.albedo.has_value() && settings.albedo.demodulate;
+    void bindInputs(const FrameView& f) {
+        frameHasAlbedo = f.albedo != nullptr && settings.albedo.demodulate;
         struct Source {
             InputBuffer* in;
             const void* host;
@@ -466,16 +473,18 @@ struct Denoiser::Impl {
         };
         std::size_t n = pixels();
         Source sources[] = {
-            {&inBeauty, f.beauty.pixels.data(), 3 * n * sizeof(float)},
-            {&inNormal, f.normal.pixels.data(), 3 * n * sizeof(float)},
-            {&inPosition, f.position.pixels.data(), 3 * n * sizeof(float)},
-            {&inDepth, f.depth.pixels.data(), n * sizeof(float)},
-            {&inId, f.objectId.data(), n * sizeof(std::int32_t)},
-            {&inAlbedo, frameHasAlbedo ? f.albedo->pixels.data() : nullptr,
+            {&inBeauty, f.beauty, 3 * n * sizeof(float)},
+            {&inNormal, f.normal, 3 * n * sizeof(float)},
+            {&inPosition, f.position, 3 * n * sizeof(float)},
+            {&inDepth, f.depth, n * sizeof(float)},
+            {&inId, f.objectId, n * sizeof(std::int32_t)},
+            {&inAlbedo, frameHasAlbedo ? f.albedo : nullptr,
              frameHasAlbedo ? 3 * n * sizeof(float) : 0},
         };
+        // Device memory, and host memory a CPU device reads directly, need no copy.
+        bool direct = device->sharesHostMemory() || f.space == MemorySpace::Device;
         for (Source& s : sources) {
-            if (device->sharesHostMemory() || s.host == nullptr) {
+            if (direct || s.host == nullptr) {
                 s.in->device = s.host;
             } else {
                 device->copyToDevice(s.in->staging.data(), s.host, s.bytes);
@@ -487,7 +496,14 @@ struct Denoiser::Impl {
 
     void process(const Frame& f, Image& output) {
         checkFrame(f);
-        if (f.width() != width() || f.height() != height()) allocate(f.width(), f.height());
+        if (output.width != f.width() || output.height != f.height() || output.channels != 3)
+            output = Image(f.width(), f.height(), 3);
+        process(viewOf(f), output.pixels.data());
+    }
+
+    void process(const FrameView& f, float* outputRgb) {
+        checkView(f);
+        if (f.width != width() || f.height != height()) allocate(f.width, f.height);
 
         auto start = Clock::now();
         bindInputs(f);
@@ -503,21 +519,33 @@ struct Denoiser::Impl {
         stats.nonFiniteReplaced = device->sumBytes(nonFinite.data(), pixels());
 
         start = Clock::now();
-        if (output.width != width() || output.height != height() || output.channels != 3)
-            output = Image(width(), height(), 3);
-        float* packTarget = device->sharesHostMemory() ? output.pixels.data() : stageOutput.data();
-        launch(PackKernel{layout, planes(filtered), packTarget});
-        if (!device->sharesHostMemory())
-            device->copyToHost(output.pixels.data(), stageOutput.data(),
-                               3 * pixels() * sizeof(float));
+        bool direct = device->sharesHostMemory() || f.space == MemorySpace::Device;
+        launch(PackKernel{layout, planes(filtered), direct ? outputRgb : stageOutput.data()});
+        if (!direct)
+            device->copyToHost(outputRgb, stageOutput.data(), 3 * pixels() * sizeof(float));
         device->synchronize();
         stats.downloadMilliseconds = millisecondsSince(start);
 
         // This frame's geometry and output are the next frame's history.
-        previousObjectToWorld = f.objectToWorld;
+        previousObjectToWorld.assign(f.objectToWorld, f.objectToWorld + f.objectCount);
         previousWorldToScreen = f.worldToScreen;
         hasHistory = temporal;
         current = 1 - current;
+    }
+
+    void checkView(const FrameView& f) const {
+        if (f.width <= 0 || f.height <= 0)
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("frame: size {}x{} is empty", f.width, f.height));
+        if (!f.beauty || !f.normal || !f.position || !f.depth || !f.objectId || f.objectCount < 0 ||
+            (f.objectCount > 0 && !f.objectToWorld))
+            throw Error(ErrorCode::InvalidInput, "frame: a required buffer is missing");
+        if (f.space == MemorySpace::Device && device->sharesHostMemory())
+            throw Error(ErrorCode::InvalidArgument,
+                        "frame: device memory needs a Denoiser on a GPU device (" + device->name() +
+                            " reads host memory)");
+        if (f.space == MemorySpace::Host)
+            checkObjectIds(f.objectId, f.width, f.height, f.objectCount);
     }
 
     // One value per pixel of a padded device plane, on the host.
@@ -577,6 +605,10 @@ Image Denoiser::processFrame(const Frame& frame) {
 
 void Denoiser::processFrame(const Frame& frame, Image& output) {
     impl_->process(frame, output);
+}
+
+void Denoiser::processFrame(const FrameView& frame, float* outputRgb) {
+    impl_->process(frame, outputRgb);
 }
 
 void Denoiser::reset() {

@@ -349,3 +349,50 @@ TEST(Denoiser, PassesAreListedWithTheirBuffers) {
 
 }  // namespace
 }  // namespace rtd
+
+namespace rtd {
+namespace {
+
+TEST(FrameViewApi, CallerOwnedHostBuffersGiveTheSameResult) {
+    test::SceneDescription d;
+    d.objectCount = 2;
+    d.id = [](int x, int) { return x < 12 ? 0 : 1; };
+    d.colour = [](int x, int y) { return std::array<float, 3>{0.1f * (x % 5), 0.3f, 0.02f * y}; };
+    Frame frame = test::makeFrame(d);
+    test::addNoise(frame, 0.2f, 5);
+    for (Method method : {Method::Temporal, Method::Svgf}) {
+        Denoiser a(test::cpuSettings(method)), b(test::cpuSettings(method));
+        std::vector<float> out(frame.beauty.pixels.size());
+        for (int i = 0; i < 2; ++i) {
+            Image expected = a.processFrame(frame);
+            b.processFrame(viewOf(frame), out.data());
+            EXPECT_EQ(out, expected.pixels) << toString(method) << " frame " << i;
+        }
+    }
+}
+
+TEST(FrameViewApi, BadViewsAreRejected) {
+    test::SceneDescription d;
+    Frame frame = test::makeFrame(d);
+    Denoiser denoiser(test::cpuSettings(Method::Atrous));
+    std::vector<float> out(frame.beauty.pixels.size());
+    FrameView onDevice = viewOf(frame);
+    onDevice.space = MemorySpace::Device;  // a CPU denoiser cannot read GPU memory
+    try {
+        denoiser.processFrame(onDevice, out.data());
+        FAIL() << "device memory accepted by a CPU denoiser";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+        EXPECT_NE(std::string(e.what()).find("GPU device"), std::string::npos) << e.what();
+    }
+    FrameView missing = viewOf(frame);
+    missing.normal = nullptr;
+    EXPECT_THROW(denoiser.processFrame(missing, out.data()), Error);
+    FrameView badIds = viewOf(frame);
+    badIds.objectCount = 0;  // every pixel holds ID 0
+    EXPECT_THROW(denoiser.processFrame(badIds, out.data()), Error);
+    EXPECT_NO_THROW(denoiser.processFrame(viewOf(frame), out.data()));
+}
+
+}  // namespace
+}  // namespace rtd

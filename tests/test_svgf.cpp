@@ -99,6 +99,7 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
         h.device->launch(SvgfTemporalKernel{h.gbuffer(),
                                             previous,
                                             &identity,
+                                            1,
                                             h.planeSet(derivatives),
                                             HistoryTest{1, 10.0f, 16.0f},
                                             h.planes(h.a),

@@ -54,6 +54,10 @@ class Denoiser {
     Image processFrame(const Frame& frame);
     // Same, writing into `output` (reused across frames: no allocation once sized).
     void processFrame(const Frame& frame, Image& output);
+    // The same from buffers the caller owns, host or (on a GPU device) device memory;
+    // `outputRgb` (width * height interleaved RGB floats) is in the same memory space. Sizes
+    // are the caller's to get right; IDs are checked only for host memory.
+    void processFrame(const FrameView& frame, float* outputRgb);
 
     // Forgets the history (e.g. at a camera cut).
     void reset();

@@ -56,4 +56,48 @@ struct Frame {
     int height() const { return beauty.height; }
 };
 
+// Where the buffers of a FrameView live.
+enum class MemorySpace {
+    Host,    // ordinary memory
+    Device,  // memory of the denoiser's GPU (a renderer that keeps its G-buffer there); needs
+             // a Denoiser on a GPU device
+};
+
+// A frame in buffers the caller owns (nothing is copied on the host side): beauty, normal,
+// position and albedo interleaved RGB floats, depth one float, IDs one int32 per pixel, rows
+// top to bottom, width * height pixels each, all in `space`. The matrices are on the host.
+struct FrameView {
+    int width = 0;
+    int height = 0;
+    MemorySpace space = MemorySpace::Host;
+    const float* beauty = nullptr;
+    const float* normal = nullptr;
+    const float* position = nullptr;
+    const float* depth = nullptr;
+    const std::int32_t* objectId = nullptr;  // -1 or 0..objectCount-1 (not checked on a device)
+    const float* albedo = nullptr;           // optional
+    const Matrix4* objectToWorld = nullptr;  // objectCount matrices
+    int objectCount = 0;
+    Matrix4 worldToCamera = Matrix4::identity();
+    Matrix4 worldToScreen = Matrix4::identity();
+};
+
+// A host view of `frame` (valid while `frame` lives).
+inline FrameView viewOf(const Frame& frame) {
+    FrameView v;
+    v.width = frame.width();
+    v.height = frame.height();
+    v.beauty = frame.beauty.pixels.data();
+    v.normal = frame.normal.pixels.data();
+    v.position = frame.position.pixels.data();
+    v.depth = frame.depth.pixels.data();
+    v.objectId = frame.objectId.data();
+    v.albedo = frame.albedo ? frame.albedo->pixels.data() : nullptr;
+    v.objectToWorld = frame.objectToWorld.data();
+    v.objectCount = int(frame.objectToWorld.size());
+    v.worldToCamera = frame.worldToCamera;
+    v.worldToScreen = frame.worldToScreen;
+    return v;
+}
+
 }  // namespace rtd

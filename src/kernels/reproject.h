@@ -44,7 +44,7 @@ struct HistoryTaps {
 RTD_HOST_DEVICE RTD_INLINE HistoryTaps findHistory(const GBufferView& g, int i,
                                                    const PreviousGeometry& previous,
                                                    const ObjectReprojection* objects,
-                                                   const PlaneSet& derivatives,
+                                                   int objectCount, const PlaneSet& derivatives,
                                                    const HistoryTest& test, int search3x3,
                                                    int hasHistory) {
     HistoryTaps taps;
@@ -57,6 +57,10 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps findHistory(const GBufferView& g, int i,
     }
     if (!hasHistory) {
         taps.code = kReprojectionNoHistory;
+        return taps;
+    }
+    if (id >= objectCount) {  // an ID the matrices do not cover (unchecked device input)
+        taps.code = kReprojectionOtherObject;
         return taps;
     }
     const ObjectReprojection& object = objects[id];
@@ -167,6 +171,7 @@ struct ReprojectKernel {
     GBufferView g;  // current frame
     PreviousGeometry previous;
     const ObjectReprojection* objects;  // one per object ID of the current frame
+    int objectCount;
     PlaneSet derivatives;
     HistoryTest test;
     Planes3 history;         // previous frame's output
@@ -176,7 +181,8 @@ struct ReprojectKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         int i = g.layout.index(x, y);
-        HistoryTaps taps = findHistory(g, i, previous, objects, derivatives, test, 0, hasHistory);
+        HistoryTaps taps =
+            findHistory(g, i, previous, objects, objectCount, derivatives, test, 0, hasHistory);
         Float3 sum;
         for (int t = 0; t < taps.count; ++t) sum += history.load(taps.index[t]) * taps.weight[t];
         reprojected.store(i, sum);

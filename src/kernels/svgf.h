@@ -46,6 +46,7 @@ struct SvgfTemporalKernel {
     GBufferView g;
     PreviousGeometry previous;
     const ObjectReprojection* objects;
+    int objectCount;
     PlaneSet derivatives;
     HistoryTest test;
     Planes3 radiance;  // noisy input, demodulated by the ingest, after firefly removal
@@ -65,7 +66,8 @@ struct SvgfTemporalKernel {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         int i = g.layout.index(x, y);
         Float3 c = radiance.load(i);
-        HistoryTaps taps = findHistory(g, i, previous, objects, derivatives, test, 1, hasHistory);
+        HistoryTaps taps =
+            findHistory(g, i, previous, objects, objectCount, derivatives, test, 1, hasHistory);
         validity[i] = taps.code;
         if (g.objectId[i] < 0) {
             illumination.store(i, c);
