@@ -192,16 +192,17 @@ void applyConfigFile(CLI::App& command, const fs::path& file) {
 }
 
 void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
+    // Named choices: the help shows the names and the default by name, not the enum values.
     c.add_option("--method", s.method, "Denoising method")
-        ->transform(CLI::CheckedTransformer(kMethods, CLI::ignore_case))
-        ->capture_default_str();
+        ->transform(CLI::CheckedTransformer(kMethods, CLI::ignore_case).description(""))
+        ->option_text(fmt::format("jbf|atrous|temporal|svgf (default {})", toString(s.method)));
     c.add_option("--spatial-filter", s.temporal.spatialFilter,
                  "Spatial filter of the temporal method")
-        ->transform(CLI::CheckedTransformer(kFilters, CLI::ignore_case))
-        ->capture_default_str();
+        ->transform(CLI::CheckedTransformer(kFilters, CLI::ignore_case).description(""))
+        ->option_text(fmt::format("jbf|atrous (default {})", toString(s.temporal.spatialFilter)));
     c.add_option("--device", s.device, "Compute device (auto picks a GPU when there is one)")
-        ->transform(CLI::CheckedTransformer(kDevices, CLI::ignore_case))
-        ->capture_default_str();
+        ->transform(CLI::CheckedTransformer(kDevices, CLI::ignore_case).description(""))
+        ->option_text(fmt::format("cpu|cuda|auto (default {})", toString(s.device)));
     c.add_option("--sigma-color", s.edges.sigmaColor, "[>0] colour edge-stopping sigma")
         ->capture_default_str();
     c.add_option("--sigma-normal", s.edges.sigmaNormal,
