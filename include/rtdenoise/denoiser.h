@@ -26,18 +26,10 @@ struct FrameStats {
     long long nonFiniteReplaced = 0;       // NaN/Inf values in the beauty set to 0
 };
 
-// Per-pixel reason of the back-projection test (DebugView::Reprojection colours them).
-enum class ReprojectionResult : int {
-    Valid = 0,
-    OutsideScreen = 1,  // drawn red
-    OtherObject = 2,    // drawn yellow (also: depth or normal disagree)
-    Background = 3,     // drawn blue; valid history is drawn green
-    NoHistory = 4,      // first frame, or the size changed: drawn black
-};
-
 // Debug images (Denoiser::debugImage).
 enum class DebugView {
-    Reprojection,   // why history was accepted or rejected, colour-coded (ReprojectionResult)
+    Reprojection,   // why history was accepted or rejected: used green, outside the screen red,
+                    // other object or depth/normal mismatch yellow, background blue, none black
     Variance,       // svgf: luminance variance after the variance pass, as grey
     HistoryLength,  // svgf: frames accumulated per pixel, grey = length / max history
 };
