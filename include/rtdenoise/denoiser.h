@@ -28,9 +28,9 @@ struct FrameStats {
 
 // Debug images (Denoiser::debugImage).
 enum class DebugView {
-    Reprojection,   // why history was accepted or rejected: used green, outside the screen red,
-                    // other object or depth/normal mismatch yellow, background blue, none black
-    Variance,       // svgf: luminance variance after the variance pass, as grey
+    Reprojection,  // why history was accepted or rejected: used green, outside the screen red,
+                   // other object or depth/normal mismatch yellow, background blue, none black
+    Variance,  // svgf: luminance standard deviation after the variance pass (grey, clipped at 1)
     HistoryLength,  // svgf: frames accumulated per pixel, grey = length / max history
 };
 
