@@ -18,7 +18,7 @@ TEST(FastMath, ExpMatchesStdExpOverTheFilterRange) {
             << "x = " << x;
     }
     EXPECT_EQ(expNegative(0.0f), 1.0f);
-    EXPECT_EQ(expNegative(-1e4f), expNegative(-1e4f));  // finite, no NaN for huge exponents
+    EXPECT_FALSE(std::isnan(expNegative(-1e4f)));  // no NaN for huge exponents
     EXPECT_LT(expNegative(-1e4f), 1e-37f);
 }
 
