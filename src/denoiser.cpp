@@ -121,7 +121,7 @@ struct Denoiser::Impl {
 
     explicit Impl(const DenoiserSettings& s) : settings(s) {
         validate(settings);
-        device = createDevice(settings.device);
+        device = createDevice(settings.device, settings.cpuIsa);
         temporal = settings.method == Method::Temporal || settings.method == Method::Svgf;
         buildPipeline();
     }

@@ -68,6 +68,22 @@ const char* toString(SpatialFilter filter) {
     return filter == SpatialFilter::Jbf ? "jbf" : "atrous";
 }
 
+const char* toString(CpuIsa isa) {
+    switch (isa) {
+        case CpuIsa::Auto:
+            return "auto";
+        case CpuIsa::Scalar:
+            return "scalar";
+        case CpuIsa::Sse2:
+            return "sse2";
+        case CpuIsa::Avx2:
+            return "avx2";
+        case CpuIsa::Avx512:
+            return "avx512";
+    }
+    return "?";
+}
+
 const char* toString(DeviceType device) {
     switch (device) {
         case DeviceType::Cpu:

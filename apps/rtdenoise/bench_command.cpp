@@ -68,12 +68,31 @@ const std::map<std::string, Method> kBenchMethods{{"jbf", Method::Jbf},
                                                   {"atrous", Method::Atrous},
                                                   {"temporal", Method::Temporal},
                                                   {"svgf", Method::Svgf}};
-const std::map<std::string, DeviceType> kBenchDevices{
-    {"cpu", DeviceType::Cpu}, {"cuda", DeviceType::Cuda}, {"auto", DeviceType::Auto}};
+struct BenchDevice {
+    DeviceType type;
+    CpuIsa isa;
+};
+// cpu-<set>: the CPU kernels built for one instruction set, to compare them in one run.
+const std::map<std::string, BenchDevice> kBenchDevices{
+    {"cpu", {DeviceType::Cpu, CpuIsa::Auto}},
+    {"cpu-scalar", {DeviceType::Cpu, CpuIsa::Scalar}},
+    {"cpu-sse2", {DeviceType::Cpu, CpuIsa::Sse2}},
+    {"cpu-avx2", {DeviceType::Cpu, CpuIsa::Avx2}},
+    {"cpu-avx512", {DeviceType::Cpu, CpuIsa::Avx512}},
+    {"cuda", {DeviceType::Cuda, CpuIsa::Auto}},
+    {"auto", {DeviceType::Auto, CpuIsa::Auto}}};
+
+std::vector<std::string> benchDeviceNames() {
+    std::vector<std::string> names;
+    for (const auto& [name, device] : kBenchDevices) names.push_back(name);
+    return names;
+}
 
 int runBench(const BenchOptions& o) {
-    fmt::print("machine: {}, {} hardware threads; GPU: none in this build\n", cpuModel(),
-               std::thread::hardware_concurrency());
+    std::string gpu = gpuName();
+    fmt::print("machine: {}, {} hardware threads (CPU kernels: {}); GPU: {}\n", cpuModel(),
+               std::thread::hardware_concurrency(), toString(bestCpuInstructionSet()),
+               gpu.empty() ? "none" : gpu);
     fs::path cache = o.cache.empty() ? fs::temp_directory_path() / "rtdenoise-bench" : o.cache;
     std::string json = "{\"cases\": [";
     bool firstCase = true;
@@ -108,13 +127,15 @@ int runBench(const BenchOptions& o) {
         double megapixels = double(width) * height / 1e6;
         fmt::print("\n{}x{}: reading a frame from disk {:.1f} ms (not in the figures below)\n",
                    width, height, readMs);
-        fmt::print("{:<9} {:<5} {:>10} {:>10} {:>9} {:>9} {:>10}\n", "method", "dev", "median ms",
-                   "min ms", "upload", "download", "Mpix/s");
-        for (const std::string& methodName : o.methods)
+        fmt::print("{:<9} {:<10} {:>10} {:>10} {:>9} {:>9} {:>10} {:>9}\n", "method", "dev",
+                   "median ms", "min ms", "upload", "download", "Mpix/s", "x scalar");
+        for (const std::string& methodName : o.methods) {
+            double scalarMs = 0.0;  // cpu-scalar's median, once timed: the speed-up baseline
             for (const std::string& deviceName : o.devices) {
                 DenoiserSettings settings;
                 settings.method = kBenchMethods.at(methodName);
-                settings.device = kBenchDevices.at(deviceName);
+                settings.device = kBenchDevices.at(deviceName).type;
+                settings.cpuIsa = kBenchDevices.at(deviceName).isa;
                 Denoiser denoiser(settings);
                 Image output;
                 for (const Frame& f : frames) denoiser.processFrame(f, output);  // warm-up
@@ -135,9 +156,11 @@ int runBench(const BenchOptions& o) {
                         t.passes[p].push_back(s.passMilliseconds[p]);
                 }
                 double med = median(t.frame);
-                fmt::print("{:<9} {:<5} {:>10.2f} {:>10.2f} {:>9.2f} {:>9.2f} {:>10.1f}\n",
+                if (deviceName == "cpu-scalar") scalarMs = med;
+                std::string speedUp = scalarMs > 0.0 ? fmt::format("{:.1f}", scalarMs / med) : "";
+                fmt::print("{:<9} {:<10} {:>10.2f} {:>10.2f} {:>9.2f} {:>9.2f} {:>10.1f} {:>9}\n",
                            methodName, deviceName, med, minimum(t.frame), median(t.upload),
-                           median(t.download), megapixels / (med / 1000.0));
+                           median(t.download), megapixels / (med / 1000.0), speedUp);
                 std::string passes;
                 for (std::size_t p = 0; p < t.passes.size(); ++p) {
                     fmt::print("    {:<16} {:8.3f} ms\n", denoiser.passes()[p].name,
@@ -155,9 +178,13 @@ int runBench(const BenchOptions& o) {
                     readMs, megapixels / (med / 1000.0), passes);
                 firstCase = false;
             }
+        }
     }
-    json += fmt::format("\n], \"machine\": {{\"cpu\": \"{}\", \"threads\": {}, \"gpu\": null}}}}\n",
-                        cpuModel(), std::thread::hardware_concurrency());
+    json += fmt::format(
+        "\n], \"machine\": {{\"cpu\": \"{}\", \"threads\": {}, \"cpu_kernels\": \"{}\", "
+        "\"gpu\": {}}}}}\n",
+        cpuModel(), std::thread::hardware_concurrency(), toString(bestCpuInstructionSet()),
+        gpu.empty() ? std::string("null") : "\"" + gpu + "\"");
     if (!o.json.empty()) writeFileAtomically(o.json, json);
     return 0;
 }
@@ -171,8 +198,10 @@ Command addBenchCommand(CLI::App& app) {
     c->add_option("--method", o->methods, "Methods to time")
         ->check(CLI::IsMember({"jbf", "atrous", "temporal", "svgf"}))
         ->capture_default_str();
-    c->add_option("--device", o->devices, "Devices to time")
-        ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+    c->add_option("--device", o->devices,
+                  "Devices to time; cpu-scalar|sse2|avx2|avx512: the CPU kernels built for one "
+                  "instruction set (with cpu-scalar first, speed-ups against it are printed)")
+        ->check(CLI::IsMember(benchDeviceNames()))
         ->capture_default_str();
     c->add_option("--size", o->sizes, "Frame sizes WxH (inputs rendered once, then cached)")
         ->capture_default_str();

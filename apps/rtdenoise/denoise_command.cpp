@@ -41,6 +41,11 @@ const std::map<std::string, SpatialFilter> kFilters{{"jbf", SpatialFilter::Jbf},
                                                     {"atrous", SpatialFilter::Atrous}};
 const std::map<std::string, DeviceType> kDevices{
     {"cpu", DeviceType::Cpu}, {"cuda", DeviceType::Cuda}, {"auto", DeviceType::Auto}};
+const std::map<std::string, CpuIsa> kCpuIsas{{"auto", CpuIsa::Auto},
+                                             {"scalar", CpuIsa::Scalar},
+                                             {"sse2", CpuIsa::Sse2},
+                                             {"avx2", CpuIsa::Avx2},
+                                             {"avx512", CpuIsa::Avx512}};
 
 double median(std::vector<double> v) {
     if (v.empty()) return 0.0;
@@ -203,6 +208,10 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     c.add_option("--device", s.device, "Compute device (auto picks a GPU when there is one)")
         ->transform(CLI::CheckedTransformer(kDevices, CLI::ignore_case).description(""))
         ->option_text(fmt::format("cpu|cuda|auto (default {})", toString(s.device)));
+    c.add_option("--cpu-isa", s.cpuIsa,
+                 "Instruction set of the CPU kernels (auto: the widest this processor has)")
+        ->transform(CLI::CheckedTransformer(kCpuIsas, CLI::ignore_case).description(""))
+        ->option_text(fmt::format("auto|scalar|sse2|avx2|avx512 (default {})", toString(s.cpuIsa)));
     c.add_option("--sigma-color", s.edges.sigmaColor, "[>0] colour edge-stopping sigma")
         ->capture_default_str();
     c.add_option("--sigma-normal", s.edges.sigmaNormal,

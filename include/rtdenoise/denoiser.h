@@ -68,4 +68,9 @@ class Denoiser {
     std::unique_ptr<Impl> impl_;
 };
 
+// The GPU --device cuda would use ("" in a build without CUDA or on a machine without a GPU).
+std::string gpuName();
+// The CPU instruction set --cpu-isa auto picks on this processor.
+CpuIsa bestCpuInstructionSet();
+
 }  // namespace rtd

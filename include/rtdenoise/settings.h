@@ -18,6 +18,10 @@ enum class SpatialFilter { Jbf, Atrous };
 
 enum class DeviceType { Cpu, Cuda, Auto };
 
+// The CPU kernels' instruction set. Auto: the widest this processor and build support. Scalar:
+// the same kernels not vectorised (one pixel at a time), the baseline speed-ups are quoted against.
+enum class CpuIsa { Auto, Scalar, Sse2, Avx2, Avx512 };
+
 // Edge-stopping terms shared by the JBF and the A-Trous filter.
 struct EdgeStoppingSettings {
     float sigmaColor = 0.6f;   // [>0] colour distance (RGB, linear) at which weight falls to e^-0.5
@@ -83,6 +87,7 @@ struct TemporalSettings {
 struct DenoiserSettings {
     Method method = Method::Svgf;  // the best on every rendered scene (README quality table)
     DeviceType device = DeviceType::Auto;
+    CpuIsa cpuIsa = CpuIsa::Auto;  // CPU device only; a narrower set is for comparisons and tests
     EdgeStoppingSettings edges;
     JbfSettings jbf;
     AtrousSettings atrous;
@@ -99,5 +104,6 @@ void validate(const DenoiserSettings& settings);
 const char* toString(Method method);
 const char* toString(SpatialFilter filter);
 const char* toString(DeviceType device);
+const char* toString(CpuIsa isa);
 
 }  // namespace rtd

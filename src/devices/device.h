@@ -34,8 +34,8 @@ class Device {
 };
 
 // Throws rtd::Error(DeviceFailure) if the requested device is not available.
-std::unique_ptr<Device> createDevice(DeviceType type);
-std::unique_ptr<Device> createCpuDevice();
+std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa = CpuIsa::Auto);
+std::unique_ptr<Device> createCpuDevice(CpuIsa isa = CpuIsa::Auto);
 // Only in builds with the CUDA back end (RTD_HAS_CUDA); throws if no GPU is present.
 std::unique_ptr<Device> createCudaDevice();
 bool cudaDeviceAvailable();

@@ -1,9 +1,15 @@
 // Spatiotemporal variance-guided filtering (Schied et al., HPG 2017; reference: Falcor's
 // SVGFPass). Albedo demodulation happens in the ingest and modulation in ModulateKernel, for
 // every method. Passes: temporal (reproject, accumulate illumination and the
-// first two luminance moments with a per-pixel history length), variance (temporal from the
-// moments, or a 7x7 edge-aware spatial estimate where the history is short), A-Trous iterations
-// guided by the variance.
+// luminance moments with a per-pixel history length), variance (temporal from the moments, or a
+// 7x7 edge-aware spatial estimate where the history is short), A-Trous iterations guided by the
+// variance.
+//
+// The moments are kept as (mean, variance) of the luminance rather than the paper's (m1, m2):
+// the same exponential averages (var = m2 - m1^2 exactly), updated in the stable form
+//   mean' = mean + a d,  var' = (1 - a)(var + a d^2),  d = l - mean,
+// because m2 - m1^2 in float cancels catastrophically for bright pixels with small variance,
+// which made results depend on the rounding of each instruction set and back end.
 #pragma once
 
 #include "kernels/reproject.h"
@@ -54,10 +60,10 @@ struct SvgfTemporalKernel {
     int clampRadius;
     float clampK;  // 0: no clamp (the paper); else history clamped to mu +- k sigma
     PlaneSet previousIllumination;  // rgb (+ variance, unused here): last frame's feedback
-    PlaneSet previousMoments;       // 2 planes
+    PlaneSet previousMoments;       // 2 planes: luminance mean, variance
     const float* previousLength;
     Planes3 illumination;  // out
-    PlaneSet moments;      // out, 2 planes
+    PlaneSet moments;      // out, 2 planes: luminance mean, variance
     float* length;         // out: frames of history, 1 after a disocclusion
     std::uint8_t* validity;
     float alpha, momentsAlpha, maxHistory;
@@ -81,21 +87,27 @@ struct SvgfTemporalKernel {
         if (taps.code != kReprojectionValid) {
             illumination.store(i, current);
             moments.at(0, i) = l;
-            moments.at(1, i) = l * l;
+            moments.at(1, i) = 0.0f;
             length[i] = 1.0f;
             return;
         }
         Float3 history;
-        float m1 = 0.0f, m2 = 0.0f, h = 0.0f;
+        float mean = 0.0f, h = 0.0f;
         const Layout& L = g.layout;
         Planes3 previousRgb = previousIllumination.rgb();
         for (int t = 0; t < taps.count; ++t) {
             int j = taps.index[t];
             float w = taps.weight[t];
             history += previousRgb.load(j) * w;
-            m1 += previousMoments.at(0, j) * w;
-            m2 += previousMoments.at(1, j) * w;
+            mean += previousMoments.at(0, j) * w;
             h += previousLength[j] * w;
+        }
+        // The taps' mixture: its variance is their mean variance plus the spread of their means.
+        float variance = 0.0f;
+        for (int t = 0; t < taps.count; ++t) {
+            int j = taps.index[t];
+            variance += (previousMoments.at(1, j) + square(previousMoments.at(0, j) - mean)) *
+                        taps.weight[t];
         }
         if (clampK > 0.0f) {
             // Anti-lag: history outside what the current frame's neighbourhood allows (a light
@@ -121,8 +133,9 @@ struct SvgfTemporalKernel {
         // Equal weights for the first frames of a history, then the exponential average.
         float a1 = maxf(alpha, 1.0f / h), a2 = maxf(momentsAlpha, 1.0f / h);
         illumination.store(i, history * (1.0f - a1) + current * a1);
-        moments.at(0, i) = m1 * (1.0f - a2) + l * a2;
-        moments.at(1, i) = m2 * (1.0f - a2) + l * l * a2;
+        float d = l - mean;
+        moments.at(0, i) = mean + a2 * d;
+        moments.at(1, i) = (1.0f - a2) * (variance + a2 * d * d);
         length[i] = h;
     }
 };
@@ -147,15 +160,21 @@ struct SvgfVarianceKernel {
         Float3 c = illumination.load(i);
         std::int32_t id = g.objectId[i];
         float h = length[i];
-        if (id < 0 || h >= shortHistory) {
+        // The history length is a bilinear mix of the taps' lengths: a pixel with 4 frames
+        // everywhere may hold 3.9999998, depending on how each back end rounds. The tolerance
+        // keeps the branch the same on every back end.
+        if (id < 0 || h >= shortHistory - 1e-3f) {
             out.rgb().store(i, c);
-            out.at(3, i) = maxf(moments.at(1, i) - square(moments.at(0, i)), 0.0f);
+            out.at(3, i) = maxf(moments.at(1, i), 0.0f);
             return;
         }
         float zI = g.depth[i], dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
         Float3 nI = g.normal.load(i);
         float lI = luminance(c);
         float inverseSigmaLuminance = 1.0f / terms.sigmaLuminance;  // no variance yet
+        // The neighbourhood's luminance variance, with each tap's mean taken relative to the
+        // centre's (shifted data: no cancellation).
+        float centreMean = moments.at(0, i);
         Float3 sum;
         float m1 = 0.0f, m2 = 0.0f, sumW = 0.0f;
         for (int dy = -radius; dy <= radius; ++dy)
@@ -166,9 +185,10 @@ struct SvgfVarianceKernel {
                     svgfLogWeight(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy), nI,
                                   g.normal.load(j), lI, luminance(cj), inverseSigmaLuminance);
                 float w = svgfTapMask(terms, id, g.objectId[j]) * expNegative(minf(logW, 0.0f));
+                float shifted = moments.at(0, j) - centreMean;
                 sum += cj * w;
-                m1 += moments.at(0, j) * w;
-                m2 += moments.at(1, j) * w;
+                m1 += shifted * w;
+                m2 += (moments.at(1, j) + shifted * shifted) * w;
                 sumW += w;
             }
         float inv = 1.0f / maxf(sumW, 1e-20f);  // the centre has weight 1

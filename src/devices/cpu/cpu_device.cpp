@@ -4,17 +4,31 @@
 #include <cstring>
 #include <new>
 
-#include "devices/cpu/parallel_for.h"
+#include "devices/cpu/cpu_kernels.h"
 #include "devices/device.h"
 #include "rtdenoise/error.h"
 
 namespace rtd {
+
+#if !RTD_CPU_KERNELS_AVX2
+const CpuKernelTable* cpuKernelsAvx2() {
+    return nullptr;
+}
+#endif
+#if !RTD_CPU_KERNELS_AVX512
+const CpuKernelTable* cpuKernelsAvx512() {
+    return nullptr;
+}
+#endif
+
 namespace {
 
 class CpuDevice final : public Device {
   public:
+    explicit CpuDevice(CpuIsa isa) : kernels_(cpuKernels(isa)) {}
     std::string name() const override {
-        return "cpu (" + std::to_string(omp_get_max_threads()) + " threads)";
+        return "cpu (" + std::to_string(omp_get_max_threads()) + " threads, " +
+               toString(kernels_.isa) + ")";
     }
     bool sharesHostMemory() const override { return true; }
 
@@ -43,16 +57,51 @@ class CpuDevice final : public Device {
 
 #define RTD_DEFINE_LAUNCH(K)                                       \
     void launch(const K& kernel, int width, int height) override { \
-        parallelFor2D(width, height, kernel);                      \
+        kernels_.run##K(kernel, width, height);                    \
     }
     RTD_FOR_EACH_KERNEL(RTD_DEFINE_LAUNCH)
 #undef RTD_DEFINE_LAUNCH
+
+  private:
+    const CpuKernelTable& kernels_;
 };
 
 }  // namespace
 
-std::unique_ptr<Device> createCpuDevice() {
-    return std::make_unique<CpuDevice>();
+std::unique_ptr<Device> createCpuDevice(CpuIsa isa) {
+    return std::make_unique<CpuDevice>(isa);
+}
+
+CpuIsa bestCpuIsa() {
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_cpu_init();
+    // x86-64-v4 and v3 feature sets, as the -march levels the tables are built for define them.
+    bool v4 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+              __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512dq") &&
+              __builtin_cpu_supports("avx512vl");
+    bool v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+              __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2");
+    if (v4 && v3 && cpuKernelsAvx512()) return CpuIsa::Avx512;
+    if (v3 && cpuKernelsAvx2()) return CpuIsa::Avx2;
+#endif
+    return CpuIsa::Sse2;
+}
+
+const CpuKernelTable& cpuKernels(CpuIsa isa) {
+    CpuIsa best = bestCpuIsa();
+    if (isa == CpuIsa::Auto) isa = best;
+    const CpuKernelTable* table = isa == CpuIsa::Avx512 ? cpuKernelsAvx512()
+                                  : isa == CpuIsa::Avx2 ? cpuKernelsAvx2()
+                                  : isa == CpuIsa::Sse2 ? cpuKernelsSse2()
+                                                        : cpuKernelsScalar();
+    if (!table)
+        throw Error(ErrorCode::DeviceFailure,
+                    std::string("--cpu-isa ") + toString(isa) + ": this build has no such kernels");
+    if (int(isa) > int(best))
+        throw Error(ErrorCode::DeviceFailure, std::string("--cpu-isa ") + toString(isa) +
+                                                  ": this processor does not support it (best: " +
+                                                  toString(best) + ")");
+    return *table;
 }
 
 }  // namespace rtd

@@ -7,10 +7,12 @@
 #endif
 
 namespace rtd {
+// Internal linkage: each instruction-set copy of the launchers (cpu_kernels.cpp) gets its own.
+namespace {
 
 // Flush denormals to zero in this thread: filter weights far below 1e-38 times a colour would
 // otherwise take the processor's slow denormal path (several times slower per operation).
-inline void flushDenormalsToZero() {
+void flushDenormalsToZero() {
 #if defined(__SSE__)
     _mm_setcsr(_mm_getcsr() | 0x8040);  // FTZ | DAZ
 #endif
@@ -23,10 +25,13 @@ void parallelFor2D(int width, int height, const Kernel& kernel) {
         flushDenormalsToZero();
 #pragma omp for schedule(dynamic, 4)
         for (int y = 0; y < height; ++y) {
+#if !defined(RTD_CPU_SCALAR)
 #pragma omp simd
+#endif
             for (int x = 0; x < width; ++x) kernel(x, y);
         }
     }
 }
 
+}  // namespace
 }  // namespace rtd

@@ -1,0 +1,31 @@
+// The CPU kernel launchers, compiled once per instruction set (cpu_kernels.cpp with -march for
+// x86-64, x86-64-v3 and x86-64-v4) and chosen at run time for the processor at hand, as OIDN and
+// ISPC do: one binary runs everywhere and uses AVX-512 where the processor has it.
+#pragma once
+
+#include "kernels/kernel_list.h"
+#include "rtdenoise/settings.h"
+
+namespace rtd {
+
+// One entry per kernel: runs it over a width x height grid of pixels on all cores.
+struct CpuKernelTable {
+    CpuIsa isa;
+#define RTD_TABLE_ENTRY(K) void (*run##K)(const K& kernel, int width, int height);
+    RTD_FOR_EACH_KERNEL(RTD_TABLE_ENTRY)
+#undef RTD_TABLE_ENTRY
+};
+
+// The tables this build holds (null where the compiler could not target the instruction set).
+const CpuKernelTable* cpuKernelsScalar();
+const CpuKernelTable* cpuKernelsSse2();
+const CpuKernelTable* cpuKernelsAvx2();
+const CpuKernelTable* cpuKernelsAvx512();
+
+// The widest instruction set both this build and this processor support.
+CpuIsa bestCpuIsa();
+// The table for `isa` (Auto: bestCpuIsa()); throws rtd::Error(DeviceFailure) if the processor
+// or this build lacks it.
+const CpuKernelTable& cpuKernels(CpuIsa isa);
+
+}  // namespace rtd
