@@ -10,6 +10,15 @@
 #define RTD_INLINE inline __attribute__((always_inline))
 #endif
 
+// Index of a pixel in a padded plane. 64-bit on the CPU: a tap's address is then a base pointer
+// plus the index, where a 32-bit index would need an add and a sign extension per tap (the
+// compiler must allow for it wrapping); 32-bit on the GPU, where 64-bit integer math costs more.
+#if defined(__CUDACC__)
+using PixelIndex = int;
+#else
+using PixelIndex = long;
+#endif
+
 // Fully unrolls a short loop with a constant trip count (the 5x5 taps), which lets the CPU
 // compiler vectorise the pixel loop around it.
 #if defined(__CUDACC__)

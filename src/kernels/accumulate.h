@@ -22,7 +22,7 @@ struct AccumulateKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
-        int i = L.index(x, y);
+        PixelIndex i = L.index(x, y);
         Float3 c = current.load(i);
         if (validity[i] != kReprojectionValid) {
             out.store(i, c);

@@ -19,7 +19,7 @@ struct AtrousKernel {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         constexpr float kB3[5] = {0.0625f, 0.25f, 0.375f, 0.25f, 0.0625f};
         const Layout& L = g.layout;
-        int i = L.index(x, y);
+        PixelIndex i = L.index(x, y);
         Float3 ci = in.load(i);
         Float3 ni = g.normal.load(i), pi = g.position.load(i);
         std::int32_t idI = g.objectId[i];
@@ -29,7 +29,7 @@ struct AtrousKernel {
         for (int ty = 0; ty < 5; ++ty) {
             RTD_UNROLL
             for (int tx = 0; tx < 5; ++tx) {
-                int j = i + L.offset((tx - 2) * stride, (ty - 2) * stride);
+                PixelIndex j = i + L.offset((tx - 2) * stride, (ty - 2) * stride);
                 Float3 cj = in.load(j);
                 float exponent = edgeStoppingExponent(edges, ci, cj, ni, g.normal.load(j), pi,
                                                       g.position.load(j));

@@ -23,8 +23,8 @@ struct IngestKernel {
     std::uint8_t* nonFiniteCount;  // per pixel (unpadded): radiance values replaced by 0
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        int s = y * layout.width + x;
-        int i = layout.index(x, y);
+        PixelIndex s = PixelIndex(y) * layout.width + x;
+        PixelIndex i = layout.index(x, y);
         int bad = 0;
         float c[3];
         for (int k = 0; k < 3; ++k) {
@@ -60,7 +60,7 @@ struct PackKernel {
     float* rgbOut;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        int s = y * layout.width + x;
+        PixelIndex s = PixelIndex(y) * layout.width + x;
         Float3 c = color.load(layout.index(x, y));
         rgbOut[3 * s] = c.x;
         rgbOut[3 * s + 1] = c.y;

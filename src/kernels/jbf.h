@@ -18,7 +18,7 @@ struct JbfKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
-        int i = L.index(x, y);
+        PixelIndex i = L.index(x, y);
         Float3 ci = in.load(i);
         if (g.objectId[i] < 0) {
             out.store(i, ci);
@@ -28,11 +28,11 @@ struct JbfKernel {
         std::int32_t idI = g.objectId[i];
         float sumR = 0.0f, sumG = 0.0f, sumB = 0.0f, sumW = 0.0f;
         for (int dy = -radius; dy <= radius; ++dy) {
-            int row = i + L.offset(0, dy);
+            PixelIndex row = i + L.offset(0, dy);
             float dy2 = float(dy * dy);
             // Branch-free inner loop (border and background taps get weight 0): vectorises.
             for (int dx = -radius; dx <= radius; ++dx) {
-                int j = row + dx;
+                PixelIndex j = row + dx;
                 Float3 cj = in.load(j);
                 float exponent = (float(dx * dx) + dy2) * coordScale +
                                  edgeStoppingExponent(edges, ci, cj, ni, g.normal.load(j), pi,

@@ -13,7 +13,7 @@ struct ModulateKernel {
     Planes3 out;     // may be `illumination` itself
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        int i = layout.index(x, y);
+        PixelIndex i = layout.index(x, y);
         out.store(i, illumination.load(i) * albedo.load(i));
     }
 };

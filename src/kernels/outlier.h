@@ -16,7 +16,7 @@ struct OutlierKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
-        int i = L.index(x, y);
+        PixelIndex i = L.index(x, y);
         Float3 c = in.load(i);
         float count = maxf(columnSum(rowSums, 0, i, L.pitch, radius), 1.0f);
         float mean = columnSum(rowSums, 1, i, L.pitch, radius) / count;

@@ -34,14 +34,14 @@ struct PreviousGeometry {
 
 // Up to 9 previous-frame pixels and their weights (summing to 1 when code is valid).
 struct HistoryTaps {
-    int index[9];
+    PixelIndex index[9];
     float weight[9];
     int count;
     std::uint8_t code;
 };
 
 // Locates pixel i's history. `derivatives`: planes dz/dx, dz/dy, fwidth(n) of the current frame.
-RTD_HOST_DEVICE RTD_INLINE HistoryTaps findHistory(const GBufferView& g, int i,
+RTD_HOST_DEVICE RTD_INLINE HistoryTaps findHistory(const GBufferView& g, PixelIndex i,
                                                    const PreviousGeometry& previous,
                                                    const ObjectReprojection* objects,
                                                    int objectCount, const PlaneSet& derivatives,
@@ -87,7 +87,7 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps findHistory(const GBufferView& g, int i,
     float fwidthDepth = (dzdx < 0 ? -dzdx : dzdx) + (dzdy < 0 ? -dzdy : dzdy);
     float fwidthNormal = derivatives.at(2, i);
     auto accepted = [&](int tx, int ty) {
-        int j = L.index(tx, ty);
+        PixelIndex j = L.index(tx, ty);
         return acceptHistory(test, id, previous.objectId[j], s.w, previous.depth[j], fwidthDepth,
                              expectedNormal, previous.normal.load(j), fwidthNormal);
     };
@@ -136,7 +136,7 @@ struct GeometryDerivativesKernel {
     GBufferView g;
     PlaneSet out;  // 0: dz/dx, 1: dz/dy, 2: fwidth(n) = |n(x+1)-n| + |n(y+1)-n| (or left/up)
 
-    RTD_HOST_DEVICE RTD_INLINE float slope(int i, int step) const {
+    RTD_HOST_DEVICE RTD_INLINE float slope(PixelIndex i, PixelIndex step) const {
         std::int32_t id = g.objectId[i];
         bool before = g.objectId[i - step] == id, after = g.objectId[i + step] == id;
         float z = g.depth[i];
@@ -145,15 +145,15 @@ struct GeometryDerivativesKernel {
         if (before) return z - g.depth[i - step];
         return 0.0f;
     }
-    RTD_HOST_DEVICE RTD_INLINE float normalChange(int i, int step) const {
+    RTD_HOST_DEVICE RTD_INLINE float normalChange(PixelIndex i, PixelIndex step) const {
         std::int32_t id = g.objectId[i];
-        int j = g.objectId[i + step] == id ? i + step : g.objectId[i - step] == id ? i - step : i;
+        PixelIndex j = g.objectId[i + step] == id ? i + step : g.objectId[i - step] == id ? i - step : i;
         Float3 d = g.normal.load(j) - g.normal.load(i);
         return std::sqrt(dot(d, d));
     }
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
-        int i = L.index(x, y);
+        PixelIndex i = L.index(x, y);
         if (g.objectId[i] < 0) {
             out.at(0, i) = 0.0f;
             out.at(1, i) = 0.0f;
@@ -180,7 +180,7 @@ struct ReprojectKernel {
     int hasHistory;          // 0 on the first frame: nothing to reproject
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        int i = g.layout.index(x, y);
+        PixelIndex i = g.layout.index(x, y);
         HistoryTaps taps =
             findHistory(g, i, previous, objects, objectCount, derivatives, test, 0, hasHistory);
         Float3 sum;

@@ -70,7 +70,7 @@ struct SvgfTemporalKernel {
     int hasHistory;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        int i = g.layout.index(x, y);
+        PixelIndex i = g.layout.index(x, y);
         Float3 c = radiance.load(i);
         HistoryTaps taps =
             findHistory(g, i, previous, objects, objectCount, derivatives, test, 1, hasHistory);
@@ -96,7 +96,7 @@ struct SvgfTemporalKernel {
         const Layout& L = g.layout;
         Planes3 previousRgb = previousIllumination.rgb();
         for (int t = 0; t < taps.count; ++t) {
-            int j = taps.index[t];
+            PixelIndex j = taps.index[t];
             float w = taps.weight[t];
             history += previousRgb.load(j) * w;
             mean += previousMoments.at(0, j) * w;
@@ -105,7 +105,7 @@ struct SvgfTemporalKernel {
         // The taps' mixture: its variance is their mean variance plus the spread of their means.
         float variance = 0.0f;
         for (int t = 0; t < taps.count; ++t) {
-            int j = taps.index[t];
+            PixelIndex j = taps.index[t];
             variance += (previousMoments.at(1, j) + square(previousMoments.at(0, j) - mean)) *
                         taps.weight[t];
         }
@@ -156,7 +156,7 @@ struct SvgfVarianceKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
-        int i = L.index(x, y);
+        PixelIndex i = L.index(x, y);
         Float3 c = illumination.load(i);
         std::int32_t id = g.objectId[i];
         float h = length[i];
@@ -179,7 +179,7 @@ struct SvgfVarianceKernel {
         float m1 = 0.0f, m2 = 0.0f, sumW = 0.0f;
         for (int dy = -radius; dy <= radius; ++dy)
             for (int dx = -radius; dx <= radius; ++dx) {
-                int j = i + L.offset(dx, dy);
+                PixelIndex j = i + L.offset(dx, dy);
                 Float3 cj = illumination.load(j);
                 float logW =
                     svgfLogWeight(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy), nI,
@@ -211,7 +211,7 @@ struct SvgfAtrousKernel {
         constexpr float kB3[5] = {0.0625f, 0.25f, 0.375f, 0.25f, 0.0625f};
         constexpr float kGauss[2] = {0.25f, 0.125f};  // 3x3: 1/4 centre, 1/8 edges, 1/16 corners
         const Layout& L = g.layout;
-        int i = L.index(x, y);
+        PixelIndex i = L.index(x, y);
         std::int32_t id = g.objectId[i];
         Float3 cI = in.rgb().load(i);
         if (id < 0) {
@@ -222,7 +222,7 @@ struct SvgfAtrousKernel {
         float prefiltered = 0.0f, prefilterW = 0.0f;
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
-                int j = i + L.offset(dx, dy);
+                PixelIndex j = i + L.offset(dx, dy);
                 float k = (dx == 0 && dy == 0)   ? kGauss[0]
                           : (dx == 0 || dy == 0) ? kGauss[1]
                                                  : 0.0625f;
@@ -243,7 +243,7 @@ struct SvgfAtrousKernel {
             RTD_UNROLL
             for (int tx = 0; tx < 5; ++tx) {
                 int ox = (tx - 2) * stride, oy = (ty - 2) * stride;
-                int j = i + L.offset(ox, oy);
+                PixelIndex j = i + L.offset(ox, oy);
                 Float3 cj = in.rgb().load(j);
                 float logW =
                     svgfLogWeight(terms, zI, g.depth[j], dzdx * float(ox) + dzdy * float(oy), nI,

@@ -21,8 +21,12 @@ struct Layout {
     int padding = 0;  // border width in pixels
     int planeSize = 0;
 
-    RTD_HOST_DEVICE RTD_INLINE int index(int x, int y) const { return origin + y * pitch + x; }
-    RTD_HOST_DEVICE RTD_INLINE int offset(int dx, int dy) const { return dy * pitch + dx; }
+    RTD_HOST_DEVICE RTD_INLINE PixelIndex index(int x, int y) const {
+        return PixelIndex(origin) + PixelIndex(y) * pitch + x;
+    }
+    RTD_HOST_DEVICE RTD_INLINE PixelIndex offset(int dx, int dy) const {
+        return PixelIndex(dy) * pitch + dx;
+    }
 };
 
 // Three planes: x (or R), then y, then z, each `planeSize` floats.
@@ -30,10 +34,10 @@ struct Planes3 {
     float* data = nullptr;
     int planeSize = 0;
 
-    RTD_HOST_DEVICE RTD_INLINE Float3 load(int i) const {
+    RTD_HOST_DEVICE RTD_INLINE Float3 load(PixelIndex i) const {
         return {data[i], data[i + planeSize], data[i + 2 * planeSize]};
     }
-    RTD_HOST_DEVICE RTD_INLINE void store(int i, Float3 v) const {
+    RTD_HOST_DEVICE RTD_INLINE void store(PixelIndex i, Float3 v) const {
         data[i] = v.x;
         data[i + planeSize] = v.y;
         data[i + 2 * planeSize] = v.z;
@@ -44,7 +48,7 @@ struct Planes3 {
 struct PlaneSet {
     float* data = nullptr;
     int planeSize = 0;
-    RTD_HOST_DEVICE RTD_INLINE float& at(int plane, int i) const {
+    RTD_HOST_DEVICE RTD_INLINE float& at(int plane, PixelIndex i) const {
         return data[plane * planeSize + i];
     }
     // Planes first..first+2 as a colour.

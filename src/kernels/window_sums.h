@@ -16,7 +16,7 @@ struct LuminanceRowSumsKernel {
     int radius;  // <= layout.padding
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        int i = g.layout.index(x, y);
+        PixelIndex i = g.layout.index(x, y);
         float count = 0.0f, sum = 0.0f, sum2 = 0.0f;
         for (int dx = -radius; dx <= radius; ++dx) {
             float use = foregroundMask(g.objectId[i + dx]);
@@ -39,7 +39,7 @@ struct ColorRowSumsKernel {
     int radius;  // <= layout.padding
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        int i = g.layout.index(x, y);
+        PixelIndex i = g.layout.index(x, y);
         float s[7] = {0, 0, 0, 0, 0, 0, 0};
         for (int dx = -radius; dx <= radius; ++dx) {
             float use = foregroundMask(g.objectId[i + dx]);
@@ -57,7 +57,7 @@ struct ColorRowSumsKernel {
 };
 
 // Column pass helper: sums plane `plane` over rows y-r..y+r at pixel index i.
-RTD_HOST_DEVICE RTD_INLINE float columnSum(const PlaneSet& sums, int plane, int i, int pitch,
+RTD_HOST_DEVICE RTD_INLINE float columnSum(const PlaneSet& sums, int plane, PixelIndex i, PixelIndex pitch,
                                            int radius) {
     float total = 0.0f;
     for (int dy = -radius; dy <= radius; ++dy) total += sums.at(plane, i + dy * pitch);
@@ -71,7 +71,7 @@ struct ColorWindowStats {
     float count;  // object pixels in the window (at least 1 reported, to divide by)
 };
 
-RTD_HOST_DEVICE RTD_INLINE ColorWindowStats colorWindowStats(const PlaneSet& rowSums, int i,
+RTD_HOST_DEVICE RTD_INLINE ColorWindowStats colorWindowStats(const PlaneSet& rowSums, PixelIndex i,
                                                              int pitch, int radius) {
     ColorWindowStats s;
     s.count = maxf(columnSum(rowSums, 0, i, pitch, radius), 1.0f);
