@@ -144,6 +144,11 @@ struct Denoiser::Impl {
         return {settings.history.geometryTests ? 1 : 0, settings.history.depthTolerance,
                 settings.history.normalTolerance};
     }
+    // How far a window kernel of this radius reads (its compile-time width, window_sums.h).
+    static int windowReach(int radius) {
+        return radius <= kNarrowWindow ? kNarrowWindow : kWideWindow;
+    }
+
     template <class Kernel>
     void launch(const Kernel& kernel) {
         device->launch(kernel, width(), height());
@@ -250,7 +255,8 @@ struct Denoiser::Impl {
     }
 
     void addGeometryPass() {
-        padding = std::max(padding, 1);
+        // Derivatives read 1 pixel away; the reprojection's 3x3 taps reach 2 past the screen.
+        padding = std::max(padding, 2);
         addPass("geometry", {"depth", "normal", "objectId"}, {"derivatives"}, [this] {
             launch(GeometryDerivativesKernel{gbuffer(), planeSet(derivatives)});
         });
@@ -270,14 +276,23 @@ struct Denoiser::Impl {
                 });
         float alpha = settings.temporal.alpha, k = settings.temporal.clampK;
         int radius = settings.temporal.clampRadius;
+        padding = std::max(padding, windowReach(radius));
         addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
-            launch(ColorRowSumsKernel{gbuffer(), planes(filtered), sums(), radius});
+            if (radius <= kNarrowWindow)
+                launch(ColorRowSumsKernel{gbuffer(), planes(filtered), sums(), radius});
+            else
+                launch(ColorRowSumsWideKernel{gbuffer(), planes(filtered), sums(), radius});
         });
         addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity"},
                 {"output", "history"}, [this, alpha, k, radius] {
-                    launch(AccumulateKernel{gbuffer(), sums(), planes(filtered),
-                                            planes(reprojected), validity.data(),
-                                            planes(history[current]), alpha, k, radius});
+                    if (radius <= kNarrowWindow)
+                        launch(AccumulateKernel{gbuffer(), sums(), planes(filtered),
+                                                planes(reprojected), validity.data(),
+                                                planes(history[current]), alpha, k, radius});
+                    else
+                        launch(AccumulateWideKernel{gbuffer(), sums(), planes(filtered),
+                                                    planes(reprojected), validity.data(),
+                                                    planes(history[current]), alpha, k, radius});
                 });
     }
 
@@ -389,13 +404,21 @@ struct Denoiser::Impl {
         if (settings.outlier.enabled) {
             int radius = settings.outlier.radius;
             float k = settings.outlier.k;
+            padding = std::max(padding, windowReach(radius));
             addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
-                launch(LuminanceRowSumsKernel{gbuffer(), planes(noisy), sums(), radius});
+                if (radius <= kNarrowWindow)
+                    launch(LuminanceRowSumsKernel{gbuffer(), planes(noisy), sums(), radius});
+                else
+                    launch(LuminanceRowSumsWideKernel{gbuffer(), planes(noisy), sums(), radius});
             });
             addPass("outlier", {"noisy", "windowSums", "objectId"}, {"despeckled"},
                     [this, radius, k] {
-                        launch(OutlierKernel{gbuffer(), sums(), planes(noisy), planes(despeckled),
-                                             radius, k});
+                        if (radius <= kNarrowWindow)
+                            launch(OutlierKernel{gbuffer(), sums(), planes(noisy),
+                                                 planes(despeckled), radius, k});
+                        else
+                            launch(OutlierWideKernel{gbuffer(), sums(), planes(noisy),
+                                                     planes(despeckled), radius, k});
                     });
             in = &despeckled;
             inName = "despeckled";

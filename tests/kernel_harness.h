@@ -63,6 +63,7 @@ struct Harness {
     // Row pass then column pass, as the Denoiser runs them.
     void accumulate(float alpha, float k, int radius) {
         int w = layout.width, h = layout.height;
+        ASSERT_LE(radius, kNarrowWindow);
         device->launch(ColorRowSumsKernel{gbuffer(), planes(a), sumPlanes(), radius}, w, h);
         device->launch(AccumulateKernel{gbuffer(), sumPlanes(), planes(a), planes(b),
                                         validity.data(), planes(c), alpha, k, radius},
@@ -70,6 +71,7 @@ struct Harness {
     }
     void removeOutliers(int radius, float k) {
         int w = layout.width, h = layout.height;
+        ASSERT_LE(radius, kNarrowWindow);
         device->launch(LuminanceRowSumsKernel{gbuffer(), planes(a), sumPlanes(), radius}, w, h);
         device->launch(OutlierKernel{gbuffer(), sumPlanes(), planes(a), planes(b), radius, k}, w,
                        h);

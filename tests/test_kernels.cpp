@@ -122,9 +122,12 @@ TEST(Outlier, FireflyIsClampedToMeanPlusTwoSigmaOthersKept) {
     EXPECT_EQ(h.planes(h.b).load(h.layout.index(0, 0)).x, 1.0f);  // neighbour below its limit
 }
 
-TEST(WindowSums, SeparableStatisticsEqualTheDirectWindow) {
-    // Random colours and a background hole: the row + column sums must equal the 2-D sums.
-    Harness h(23, 17, 4);
+// The row + column sums equal the 2-D window sums, for a narrow and a wide kernel and radii
+// below their compile-time width (the masked taps).
+template <int MaxRadius>
+void expectSeparableSumsEqualDirect(int r) {
+    // Random colours and a background hole.
+    Harness h(23, 17, kWideWindow);
     std::uint32_t state = 12345;
     auto next = [&state] {
         state = state * 1664525u + 1013904223u;
@@ -135,14 +138,14 @@ TEST(WindowSums, SeparableStatisticsEqualTheDirectWindow) {
             h.planes(h.a).store(h.layout.index(x, y), make3(next(), next(), next()));
             if (x > 5 && x < 9 && y > 3 && y < 12) h.ids.data()[h.layout.index(x, y)] = -1;
         }
-    const int r = 3;
-    h.device->launch(ColorRowSumsKernel{h.gbuffer(), h.planes(h.a), h.sumPlanes(), r}, 23, 17);
+    h.device->launch(ColorRowSums<MaxRadius>{h.gbuffer(), h.planes(h.a), h.sumPlanes(), r}, 23,
+                     17);
     for (int y = 0; y < 17; ++y)
         for (int x = 0; x < 23; ++x) {
             double direct[7] = {0, 0, 0, 0, 0, 0, 0};
             for (int yy = std::max(0, y - r); yy <= std::min(16, y + r); ++yy)
                 for (int xx = std::max(0, x - r); xx <= std::min(22, x + r); ++xx) {
-                    int j = h.layout.index(xx, yy);
+                    auto j = h.layout.index(xx, yy);
                     if (h.ids.data()[j] < 0) continue;
                     Float3 v = h.planes(h.a).load(j);
                     double c[3] = {v.x, v.y, v.z};
@@ -152,12 +155,19 @@ TEST(WindowSums, SeparableStatisticsEqualTheDirectWindow) {
                         direct[4 + k] += c[k] * c[k];
                     }
                 }
-            int i = h.layout.index(x, y);
+            auto i = h.layout.index(x, y);
             for (int plane = 0; plane < 7; ++plane)
-                EXPECT_NEAR(columnSum(h.sumPlanes(), plane, i, h.layout.pitch, r), direct[plane],
-                            1e-4)
-                    << "plane " << plane << " at (" << x << ", " << y << ")";
+                EXPECT_NEAR(columnSum<MaxRadius>(h.sumPlanes(), plane, i, h.layout.pitch, r),
+                            direct[plane], 1e-3)
+                    << "radius " << r << ", plane " << plane << " at (" << x << ", " << y << ")";
         }
+}
+
+TEST(WindowSums, SeparableStatisticsEqualTheDirectWindow) {
+    expectSeparableSumsEqualDirect<kNarrowWindow>(1);
+    expectSeparableSumsEqualDirect<kNarrowWindow>(3);
+    expectSeparableSumsEqualDirect<kWideWindow>(5);
+    expectSeparableSumsEqualDirect<kWideWindow>(15);
 }
 
 }  // namespace

@@ -42,8 +42,10 @@ RTD_HOST_DEVICE RTD_INLINE float square(float v) {
     return v * v;
 }
 RTD_HOST_DEVICE RTD_INLINE Float3 normalize(Float3 v) {
+    // One scale factor, not a choice between two vectors: a select of whole structs would stop
+    // the CPU compiler vectorising the caller.
     float length2 = dot(v, v);
-    return length2 > 0.0f ? v * (1.0f / std::sqrt(length2)) : v;
+    return v * (length2 > 0.0f ? 1.0f / std::sqrt(length2) : 1.0f);
 }
 RTD_HOST_DEVICE RTD_INLINE float minf(float a, float b) {
     return a < b ? a : b;

@@ -9,30 +9,31 @@
 
 namespace rtd {
 
-struct AccumulateKernel {
+template <int MaxRadius>
+struct Accumulate {
     GBufferView g;
-    PlaneSet rowSums;     // from ColorRowSumsKernel over `current`
+    PlaneSet rowSums;     // from ColorRowSums<MaxRadius> over `current`
     Planes3 current;      // this frame, spatially filtered
     Planes3 reprojected;  // history at this pixel
     const std::uint8_t* validity;
     Planes3 out;
     float alpha;
     float clampK;
-    int radius;
+    int radius;  // <= MaxRadius
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 c = current.load(i);
-        if (validity[i] != kReprojectionValid) {
-            out.store(i, c);
-            return;
-        }
-        ColorWindowStats w = colorWindowStats(rowSums, i, L.pitch, radius);
+        // Branch-free (the CPU vectorises it): invalid history gets weight 0 (a = 1).
+        float a = validity[i] == kReprojectionValid ? alpha : 1.0f;
+        ColorWindowStats w = colorWindowStats<MaxRadius>(rowSums, i, L.pitch, radius);
         Float3 history =
             clamp3(reprojected.load(i), w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
-        out.store(i, c * alpha + history * (1.0f - alpha));
+        out.store(i, c * a + history * (1.0f - a));
     }
 };
+using AccumulateKernel = Accumulate<kNarrowWindow>;
+using AccumulateWideKernel = Accumulate<kWideWindow>;
 
 }  // namespace rtd

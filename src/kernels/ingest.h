@@ -38,9 +38,10 @@ struct IngestKernel {
         if (albedoRgb && idIn[s] >= 0) {
             float r = albedoRgb[3 * s], gr = albedoRgb[3 * s + 1], b = albedoRgb[3 * s + 2];
             bool finite = isFinite(r) && isFinite(gr) && isFinite(b);
-            a = finite
-                    ? make3(maxf(r, albedoEpsilon), maxf(gr, albedoEpsilon), maxf(b, albedoEpsilon))
-                    : a;
+            // Per component, not a choice between two vectors (which stops vectorisation).
+            a.x = finite ? maxf(r, albedoEpsilon) : 1.0f;
+            a.y = finite ? maxf(gr, albedoEpsilon) : 1.0f;
+            a.z = finite ? maxf(b, albedoEpsilon) : 1.0f;
         }
         albedo.store(i, a);
         beauty.store(i, make3(c[0] / a.x, c[1] / a.y, c[2] / a.z));

@@ -16,13 +16,17 @@
     X(IngestKernel)              \
     X(PackKernel)                \
     X(LuminanceRowSumsKernel)    \
+    X(LuminanceRowSumsWideKernel) \
     X(ColorRowSumsKernel)        \
+    X(ColorRowSumsWideKernel)    \
     X(OutlierKernel)             \
+    X(OutlierWideKernel)         \
     X(JbfKernel)                 \
     X(AtrousKernel)              \
     X(GeometryDerivativesKernel) \
     X(ReprojectKernel)           \
     X(AccumulateKernel)          \
+    X(AccumulateWideKernel)      \
     X(SvgfTemporalKernel)        \
     X(SvgfVarianceKernel)        \
     X(SvgfAtrousKernel)          \

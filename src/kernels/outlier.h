@@ -7,21 +7,22 @@
 
 namespace rtd {
 
-struct OutlierKernel {
+template <int MaxRadius>
+struct Outlier {
     GBufferView g;
-    PlaneSet rowSums;  // from LuminanceRowSumsKernel
+    PlaneSet rowSums;  // from LuminanceRowSums<MaxRadius>
     Planes3 in, out;
-    int radius;
+    int radius;  // <= MaxRadius
     float k;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 c = in.load(i);
-        float count = maxf(columnSum(rowSums, 0, i, L.pitch, radius), 1.0f);
-        float mean = columnSum(rowSums, 1, i, L.pitch, radius) / count;
+        float count = maxf(columnSum<MaxRadius>(rowSums, 0, i, L.pitch, radius), 1.0f);
+        float mean = columnSum<MaxRadius>(rowSums, 1, i, L.pitch, radius) / count;
         float variance =
-            maxf(columnSum(rowSums, 2, i, L.pitch, radius) / count - mean * mean, 0.0f);
+            maxf(columnSum<MaxRadius>(rowSums, 2, i, L.pitch, radius) / count - mean * mean, 0.0f);
         float limit = mean + k * std::sqrt(variance);
         float l = luminance(c);
         // Background keeps its value (its window statistics are not its own).
@@ -29,5 +30,7 @@ struct OutlierKernel {
         out.store(i, c * scale);
     }
 };
+using OutlierKernel = Outlier<kNarrowWindow>;
+using OutlierWideKernel = Outlier<kWideWindow>;
 
 }  // namespace rtd

@@ -32,101 +32,94 @@ struct PreviousGeometry {
     Planes3 normal;
 };
 
-// Up to 9 previous-frame pixels and their weights (summing to 1 when code is valid).
+// The previous-frame pixels that may hold pixel i's history, and their weights (summing to 1
+// when code is valid, all 0 otherwise). Without the 3x3 search: the bilinear 2x2 block. With it:
+// the 3x3 block around the nearest pixel, which always contains the 2x2 block, so one fixed set
+// of taps serves both the bilinear weights and the search. Consumers loop over all the taps
+// with no data-dependent control flow, which lets the CPU vectorise them.
+template <int Taps>
 struct HistoryTaps {
-    PixelIndex index[9];
-    float weight[9];
-    int count;
+    static constexpr int kCount = Taps;
+    PixelIndex index[Taps];  // always inside the padded plane, even when unused
+    float weight[Taps];
     std::uint8_t code;
 };
 
 // Locates pixel i's history. `derivatives`: planes dz/dx, dz/dy, fwidth(n) of the current frame.
-RTD_HOST_DEVICE RTD_INLINE HistoryTaps findHistory(const GBufferView& g, PixelIndex i,
-                                                   const PreviousGeometry& previous,
-                                                   const ObjectReprojection* objects,
-                                                   int objectCount, const PlaneSet& derivatives,
-                                                   const HistoryTest& test, int search3x3,
-                                                   int hasHistory) {
-    HistoryTaps taps;
-    taps.count = 0;
+// Search3x3: when all four bilinear taps fail the history test, average the 3x3 taps that pass.
+// Branch-free: every test yields a mask, and a pixel that fails one still computes the rest on
+// safe (clamped) coordinates; needs layout.padding >= 2.
+template <bool Search3x3>
+RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
+    const GBufferView& g, PixelIndex i, const PreviousGeometry& previous,
+    const ObjectReprojection* objects, int objectCount, const PlaneSet& derivatives,
+    const HistoryTest& test, int hasHistory) {
+    constexpr int kTaps = Search3x3 ? 9 : 4;
     const Layout& L = g.layout;
     std::int32_t id = g.objectId[i];
-    if (id < 0) {
-        taps.code = kReprojectionBackground;
-        return taps;
-    }
-    if (!hasHistory) {
-        taps.code = kReprojectionNoHistory;
-        return taps;
-    }
-    if (id >= objectCount) {  // an ID the matrices do not cover (unchecked device input)
-        taps.code = kReprojectionOtherObject;
-        return taps;
-    }
-    const ObjectReprojection& object = objects[id];
-    if (!object.valid) {
-        taps.code = kReprojectionOtherObject;
-        return taps;
-    }
+    // An ID the matrices do not cover (unchecked device input) reads object 0, then fails.
+    bool knownId = id >= 0 && id < objectCount;
+    const ObjectReprojection& object = objects[knownId ? id : 0];
+    bool trackable = knownId && hasHistory && object.valid;
+
     Float3 position = g.position.load(i);
     Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
-    if (!(s.w > 0.0f)) {  // behind the previous camera (or NaN)
-        taps.code = kReprojectionOutsideScreen;
-        return taps;
-    }
+    bool inFront = s.w > 0.0f;  // false behind the previous camera, or NaN
+    float inverseW = 1.0f / (inFront ? s.w : 1.0f);
     // Continuous coordinates in which pixel centres are integers.
-    float sx = s.x / s.w - 0.5f, sy = s.y / s.w - 0.5f;
-    if (!(sx > -1.0f && sx < float(L.width) && sy > -1.0f && sy < float(L.height))) {
-        taps.code = kReprojectionOutsideScreen;
-        return taps;
-    }
+    float sx = s.x * inverseW - 0.5f, sy = s.y * inverseW - 0.5f;
+    bool onScreen =
+        inFront && sx > -1.0f && sx < float(L.width) && sy > -1.0f && sy < float(L.height);
+    sx = onScreen ? sx : 0.0f;
+    sy = onScreen ? sy : 0.0f;
+
     // Rigid motion (or uniform scale) assumed: the rotated normal, renormalised.
     Float3 expectedNormal =
         normalize(transformVector(object.currentWorldToPreviousWorld, g.normal.load(i)));
     float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
     float fwidthDepth = (dzdx < 0 ? -dzdx : dzdx) + (dzdy < 0 ? -dzdy : dzdy);
     float fwidthNormal = derivatives.at(2, i);
-    auto accepted = [&](int tx, int ty) {
-        PixelIndex j = L.index(tx, ty);
-        return acceptHistory(test, id, previous.objectId[j], s.w, previous.depth[j], fwidthDepth,
-                             expectedNormal, previous.normal.load(j), fwidthNormal);
-    };
 
-    int x0 = int(std::floor(sx)), y0 = int(std::floor(sy));
-    float fx = sx - float(x0), fy = sy - float(y0);
-    float sumW = 0.0f;
-    for (int t = 0; t < 4; ++t) {
-        int tx = x0 + (t & 1), ty = y0 + (t >> 1);
-        float w = ((t & 1) ? fx : 1.0f - fx) * ((t >> 1) ? fy : 1.0f - fy);
-        if (tx < 0 || ty < 0 || tx >= L.width || ty >= L.height || w <= 0.0f) continue;
-        if (!accepted(tx, ty)) continue;
-        taps.index[taps.count] = L.index(tx, ty);
-        taps.weight[taps.count] = w;
-        ++taps.count;
-        sumW += w;
+    float floorX = std::floor(sx), floorY = std::floor(sy);
+    float fx = sx - floorX, fy = sy - floorY;
+    int x0 = int(floorX), y0 = int(floorY);
+    // The first tap: the 2x2 block's corner, or the 3x3 block's around the nearest pixel.
+    int firstX = Search3x3 ? int(std::floor(sx + 0.5f)) - 1 : x0;
+    int firstY = Search3x3 ? int(std::floor(sy + 0.5f)) - 1 : y0;
+    constexpr int kSide = Search3x3 ? 3 : 2;
+
+    HistoryTaps<kTaps> taps;
+    bool accepted[kTaps];
+    float bilinearSum = 0.0f, acceptedCount = 0.0f;
+    RTD_UNROLL
+    for (int t = 0; t < kTaps; ++t) {
+        int tx = firstX + t % kSide, ty = firstY + t / kSide;
+        // Taps off the screen lie in the border (object ID -1): rejected by the ID test.
+        PixelIndex j = L.index(tx, ty);
+        bool ok = acceptHistory(test, id, previous.objectId[j], s.w, previous.depth[j],
+                                fwidthDepth, expectedNormal, previous.normal.load(j),
+                                fwidthNormal);
+        float wx = tx == x0 ? 1.0f - fx : tx == x0 + 1 ? fx : 0.0f;
+        float wy = ty == y0 ? 1.0f - fy : ty == y0 + 1 ? fy : 0.0f;
+        taps.index[t] = j;
+        accepted[t] = ok;
+        taps.weight[t] = ok ? wx * wy : 0.0f;
+        bilinearSum += taps.weight[t];
+        acceptedCount += ok ? 1.0f : 0.0f;
     }
-    if (sumW < 1e-4f && search3x3) {
-        taps.count = 0;
-        sumW = 0.0f;
-        int cx = int(std::floor(sx + 0.5f)), cy = int(std::floor(sy + 0.5f));
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                int tx = cx + dx, ty = cy + dy;
-                if (tx < 0 || ty < 0 || tx >= L.width || ty >= L.height) continue;
-                if (!accepted(tx, ty)) continue;
-                taps.index[taps.count] = L.index(tx, ty);
-                taps.weight[taps.count] = 1.0f;
-                ++taps.count;
-                sumW += 1.0f;
-            }
-    }
-    if (sumW < 1e-4f) {
-        taps.count = 0;
-        taps.code = kReprojectionOtherObject;
-        return taps;
-    }
-    for (int t = 0; t < taps.count; ++t) taps.weight[t] /= sumW;
-    taps.code = kReprojectionValid;
+    bool search = Search3x3 && bilinearSum < 1e-4f;
+    float total = search ? acceptedCount : bilinearSum;
+    bool valid = trackable && onScreen && total >= 1e-4f;
+    float scale = valid ? 1.0f / total : 0.0f;
+    RTD_UNROLL
+    for (int t = 0; t < kTaps; ++t)
+        taps.weight[t] = (search ? (accepted[t] ? 1.0f : 0.0f) : taps.weight[t]) * scale;
+    taps.code = id < 0          ? kReprojectionBackground
+                : !hasHistory   ? kReprojectionNoHistory
+                : !trackable    ? kReprojectionOtherObject
+                : !onScreen     ? kReprojectionOutsideScreen
+                : !valid        ? kReprojectionOtherObject
+                                : kReprojectionValid;
     return taps;
 }
 
@@ -181,10 +174,12 @@ struct ReprojectKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        HistoryTaps taps =
-            findHistory(g, i, previous, objects, objectCount, derivatives, test, 0, hasHistory);
-        Float3 sum;
-        for (int t = 0; t < taps.count; ++t) sum += history.load(taps.index[t]) * taps.weight[t];
+        auto taps = findHistory<false>(g, i, previous, objects, objectCount, derivatives, test,
+                                       hasHistory);
+        Float3 sum;  // 0 where invalid: every weight is 0
+        RTD_UNROLL
+        for (int t = 0; t < taps.kCount; ++t)
+            sum += history.load(taps.index[t]) * taps.weight[t];
         reprojected.store(i, sum);
         validity[i] = taps.code;
     }

@@ -57,7 +57,7 @@ struct SvgfTemporalKernel {
     HistoryTest test;
     Planes3 radiance;  // noisy input, demodulated by the ingest, after firefly removal
     PlaneSet rowSums;  // ColorRowSumsKernel over `radiance`: the anti-lag clamp's window
-    int clampRadius;
+    int clampRadius;  // <= kNarrowWindow
     float clampK;  // 0: no clamp (the paper); else history clamped to mu +- k sigma
     PlaneSet previousIllumination;  // rgb (+ variance, unused here): last frame's feedback
     PlaneSet previousMoments;       // 2 planes: luminance mean, variance
@@ -69,33 +69,25 @@ struct SvgfTemporalKernel {
     float alpha, momentsAlpha, maxHistory;
     int hasHistory;
 
+    // Branch-free (every pixel computes every term; selects pick the outputs) so the CPU
+    // vectorises it across pixels.
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        PixelIndex i = g.layout.index(x, y);
-        Float3 c = radiance.load(i);
-        HistoryTaps taps =
-            findHistory(g, i, previous, objects, objectCount, derivatives, test, 1, hasHistory);
+        const Layout& L = g.layout;
+        PixelIndex i = L.index(x, y);
+        Float3 current = radiance.load(i);
+        auto taps = findHistory<true>(g, i, previous, objects, objectCount, derivatives, test,
+                                      hasHistory);
         validity[i] = taps.code;
-        if (g.objectId[i] < 0) {
-            illumination.store(i, c);
-            moments.at(0, i) = 0.0f;
-            moments.at(1, i) = 0.0f;
-            length[i] = 0.0f;
-            return;
-        }
-        Float3 current = c;
+        bool object = g.objectId[i] >= 0;
+        bool valid = taps.code == kReprojectionValid;
         float l = luminance(current);
-        if (taps.code != kReprojectionValid) {
-            illumination.store(i, current);
-            moments.at(0, i) = l;
-            moments.at(1, i) = 0.0f;
-            length[i] = 1.0f;
-            return;
-        }
+
+        // The history (all weights 0 where invalid).
         Float3 history;
         float mean = 0.0f, h = 0.0f;
-        const Layout& L = g.layout;
         Planes3 previousRgb = previousIllumination.rgb();
-        for (int t = 0; t < taps.count; ++t) {
+        RTD_UNROLL
+        for (int t = 0; t < taps.kCount; ++t) {
             PixelIndex j = taps.index[t];
             float w = taps.weight[t];
             history += previousRgb.load(j) * w;
@@ -104,16 +96,19 @@ struct SvgfTemporalKernel {
         }
         // The taps' mixture: its variance is their mean variance plus the spread of their means.
         float variance = 0.0f;
-        for (int t = 0; t < taps.count; ++t) {
+        RTD_UNROLL
+        for (int t = 0; t < taps.kCount; ++t) {
             PixelIndex j = taps.index[t];
             variance += (previousMoments.at(1, j) + square(previousMoments.at(0, j) - mean)) *
                         taps.weight[t];
         }
-        if (clampK > 0.0f) {
-            // Anti-lag: history outside what the current frame's neighbourhood allows (a light
-            // switched, a shadow moved) is pulled into mu +- k sigma; ordinary history, inside
-            // the wide 1-spp spread, is untouched.
-            ColorWindowStats w = colorWindowStats(rowSums, i, L.pitch, clampRadius);
+        {
+            // Anti-lag (clampK > 0): history outside what the current frame's neighbourhood
+            // allows (a light switched, a shadow moved) is pulled into mu +- k sigma; ordinary
+            // history, inside the wide 1-spp spread, is untouched. Selects, not an `if`, so the
+            // kernel stays vectorisable (the window sums exist whenever clampK > 0).
+            bool antiLag = clampK > 0.0f;
+            ColorWindowStats w = colorWindowStats<kNarrowWindow>(rowSums, i, L.pitch, clampRadius);
             // Lighting changed where the history is further from the neighbourhood's mean than
             // that mean's own noise allows (3 standard errors, the mean of `count` samples):
             // the history length is scaled by (1 - relative change beyond that)^4 (the power
@@ -125,18 +120,23 @@ struct SvgfTemporalKernel {
             float gap = maxf(
                 (historyL > meanL ? historyL - meanL : meanL - historyL) - 3.0f * standardError,
                 0.0f);
-            float change = minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f);
+            float change = antiLag ? minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f) : 0.0f;
             h *= square(square(1.0f - change));
-            history = clamp3(history, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
+            Float3 clamped = clamp3(history, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
+            history.x = antiLag ? clamped.x : history.x;
+            history.y = antiLag ? clamped.y : history.y;
+            history.z = antiLag ? clamped.z : history.z;
         }
-        h = minf(h + 1.0f, maxHistory);
+        // A new history (disocclusion, first frame) starts at 1 frame: alpha 1, the current
+        // sample alone. Background: passed through, no history.
+        h = valid ? minf(h + 1.0f, maxHistory) : 1.0f;
         // Equal weights for the first frames of a history, then the exponential average.
         float a1 = maxf(alpha, 1.0f / h), a2 = maxf(momentsAlpha, 1.0f / h);
-        illumination.store(i, history * (1.0f - a1) + current * a1);
         float d = l - mean;
-        moments.at(0, i) = mean + a2 * d;
-        moments.at(1, i) = (1.0f - a2) * (variance + a2 * d * d);
-        length[i] = h;
+        illumination.store(i, history * (1.0f - a1) + current * a1);
+        moments.at(0, i) = object ? mean + a2 * d : 0.0f;
+        moments.at(1, i) = object ? (1.0f - a2) * (variance + a2 * d * d) : 0.0f;
+        length[i] = object ? h : 0.0f;
     }
 };
 

@@ -2,24 +2,40 @@
 // the count of object pixels and their first and second moments; a column pass (the consumer:
 // firefly removal, history clamp) sums those over 2r+1 rows. O(r) per pixel instead of O(r^2).
 // Background and border pixels do not count. The border rows of the sums stay 0.
+//
+// The window loops run over a compile-time MaxRadius, fully unrolled, with the taps beyond the
+// run-time radius masked out: a loop with a run-time trip count inside the pixel function stops
+// the CPU compiler vectorising across pixels (it vectorised the short inner loop instead, many
+// times slower). Two widths are built: kNarrowWindow (3, a 7x7 window: every default) and
+// kWideWindow (15, the settings' maximum). Taps reach MaxRadius pixels: padding >= MaxRadius.
 #pragma once
 
 #include "kernels/views.h"
 
 namespace rtd {
 
+constexpr int kNarrowWindow = 3;
+constexpr int kWideWindow = 15;
+
+// 1 for window offsets within the run-time radius, 0 beyond.
+RTD_HOST_DEVICE RTD_INLINE float withinRadius(int offset, int radius) {
+    return (offset < 0 ? -offset : offset) <= radius ? 1.0f : 0.0f;
+}
+
 // Planes: 0 count, 1 sum of luminance, 2 sum of luminance^2.
-struct LuminanceRowSumsKernel {
+template <int MaxRadius>
+struct LuminanceRowSums {
     GBufferView g;
     Planes3 color;
     PlaneSet sums;
-    int radius;  // <= layout.padding
+    int radius;  // <= MaxRadius
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
         float count = 0.0f, sum = 0.0f, sum2 = 0.0f;
-        for (int dx = -radius; dx <= radius; ++dx) {
-            float use = foregroundMask(g.objectId[i + dx]);
+        RTD_UNROLL
+        for (int dx = -MaxRadius; dx <= MaxRadius; ++dx) {
+            float use = foregroundMask(g.objectId[i + dx]) * withinRadius(dx, radius);
             float l = luminance(color.load(i + dx));
             count += use;
             sum += use * l;
@@ -30,60 +46,74 @@ struct LuminanceRowSumsKernel {
         sums.at(2, i) = sum2;
     }
 };
+using LuminanceRowSumsKernel = LuminanceRowSums<kNarrowWindow>;
+using LuminanceRowSumsWideKernel = LuminanceRowSums<kWideWindow>;
 
 // Planes: 0 count, 1-3 sum of R, G, B, 4-6 sum of R^2, G^2, B^2.
-struct ColorRowSumsKernel {
+template <int MaxRadius>
+struct ColorRowSums {
     GBufferView g;
     Planes3 color;
     PlaneSet sums;
-    int radius;  // <= layout.padding
+    int radius;  // <= MaxRadius
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        float s[7] = {0, 0, 0, 0, 0, 0, 0};
-        for (int dx = -radius; dx <= radius; ++dx) {
-            float use = foregroundMask(g.objectId[i + dx]);
+        float s0 = 0.0f;
+        Float3 s1, s2;
+        RTD_UNROLL
+        for (int dx = -MaxRadius; dx <= MaxRadius; ++dx) {
+            float use = foregroundMask(g.objectId[i + dx]) * withinRadius(dx, radius);
             Float3 c = color.load(i + dx) * use;
-            s[0] += use;
-            s[1] += c.x;
-            s[2] += c.y;
-            s[3] += c.z;
-            s[4] += c.x * c.x;
-            s[5] += c.y * c.y;
-            s[6] += c.z * c.z;
+            s0 += use;
+            s1 += c;
+            s2 += c * c;
         }
-        for (int k = 0; k < 7; ++k) sums.at(k, i) = s[k];
+        sums.at(0, i) = s0;
+        sums.rgb(1).store(i, s1);
+        sums.rgb(4).store(i, s2);
     }
 };
+using ColorRowSumsKernel = ColorRowSums<kNarrowWindow>;
+using ColorRowSumsWideKernel = ColorRowSums<kWideWindow>;
 
 // Column pass helper: sums plane `plane` over rows y-r..y+r at pixel index i.
-RTD_HOST_DEVICE RTD_INLINE float columnSum(const PlaneSet& sums, int plane, PixelIndex i, PixelIndex pitch,
-                                           int radius) {
+template <int MaxRadius>
+RTD_HOST_DEVICE RTD_INLINE float columnSum(const PlaneSet& sums, int plane, PixelIndex i,
+                                           PixelIndex pitch, int radius) {
     float total = 0.0f;
-    for (int dy = -radius; dy <= radius; ++dy) total += sums.at(plane, i + dy * pitch);
+    RTD_UNROLL
+    for (int dy = -MaxRadius; dy <= MaxRadius; ++dy)
+        total += sums.at(plane, i + dy * pitch) * withinRadius(dy, radius);
     return total;
 }
 
 // Per-channel mean and standard deviation of the object pixels in pixel i's (2r+1)^2 window,
-// from ColorRowSumsKernel's planes.
+// from ColorRowSums' planes.
 struct ColorWindowStats {
     Float3 mean, sigma;
     float count;  // object pixels in the window (at least 1 reported, to divide by)
 };
 
-RTD_HOST_DEVICE RTD_INLINE ColorWindowStats colorWindowStats(const PlaneSet& rowSums, PixelIndex i,
-                                                             int pitch, int radius) {
+template <int MaxRadius>
+RTD_HOST_DEVICE RTD_INLINE ColorWindowStats colorWindowStats(const PlaneSet& rowSums,
+                                                             PixelIndex i, PixelIndex pitch,
+                                                             int radius) {
     ColorWindowStats s;
-    s.count = maxf(columnSum(rowSums, 0, i, pitch, radius), 1.0f);
+    s.count = maxf(columnSum<MaxRadius>(rowSums, 0, i, pitch, radius), 1.0f);
     float inv = 1.0f / s.count;
-    float m[3], sd[3];
-    for (int ch = 0; ch < 3; ++ch) {
-        m[ch] = columnSum(rowSums, 1 + ch, i, pitch, radius) * inv;
-        float meanSquare = columnSum(rowSums, 4 + ch, i, pitch, radius) * inv;
-        sd[ch] = std::sqrt(maxf(meanSquare - m[ch] * m[ch], 0.0f));
-    }
-    s.mean = make3(m[0], m[1], m[2]);
-    s.sigma = make3(sd[0], sd[1], sd[2]);
+    Float3 mean = make3(columnSum<MaxRadius>(rowSums, 1, i, pitch, radius),
+                        columnSum<MaxRadius>(rowSums, 2, i, pitch, radius),
+                        columnSum<MaxRadius>(rowSums, 3, i, pitch, radius)) *
+                  inv;
+    Float3 meanSquare = make3(columnSum<MaxRadius>(rowSums, 4, i, pitch, radius),
+                              columnSum<MaxRadius>(rowSums, 5, i, pitch, radius),
+                              columnSum<MaxRadius>(rowSums, 6, i, pitch, radius)) *
+                        inv;
+    s.mean = mean;
+    s.sigma = make3(std::sqrt(maxf(meanSquare.x - mean.x * mean.x, 0.0f)),
+                    std::sqrt(maxf(meanSquare.y - mean.y * mean.y, 0.0f)),
+                    std::sqrt(maxf(meanSquare.z - mean.z * mean.z, 0.0f)));
     return s;
 }
 
