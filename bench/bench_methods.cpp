@@ -28,6 +28,15 @@ const std::vector<Frame>& frames() {
     return loaded;
 }
 
+// 0, 1, ..., n-1, n-2, ..., 1, 0, 1, ...: the frames played forwards then backwards, so every
+// step is between neighbouring frames (cycling 0..n-1 would cut back to frame 0 each time, a
+// disocclusion of the whole moving scene that a real sequence does not have).
+std::size_t pingPong(std::size_t i, std::size_t n) {
+    if (n < 2) return 0;
+    std::size_t period = 2 * (n - 1), k = i % period;
+    return k < n ? k : period - k;
+}
+
 void runMethod(benchmark::State& state, Method method, SpatialFilter filter) {
     if (frames().empty()) {
         state.SkipWithError("course data not found beside the repository");
@@ -45,7 +54,7 @@ void runMethod(benchmark::State& state, Method method, SpatialFilter filter) {
     for (const Frame& f : frames()) denoiser.processFrame(f, output);
     std::size_t i = 0;
     for (auto _ : state) {
-        denoiser.processFrame(frames()[i++ % frames().size()], output);
+        denoiser.processFrame(frames()[pingPong(i++, frames().size())], output);
         benchmark::DoNotOptimize(output.pixels.data());
         const FrameStats& stats = denoiser.lastFrameStats();
         for (std::size_t p = 0; p < passTotals.size(); ++p)

@@ -144,6 +144,18 @@ struct Denoiser::Impl {
         return {settings.history.geometryTests ? 1 : 0, settings.history.depthTolerance,
                 settings.history.normalTolerance};
     }
+    template <class Kernel>
+    void launchSvgfTemporal(const DeviceBuffer<float>& in, const SvgfSettings& sv) {
+        constexpr int kClampRadius = 3;  // 7x7, as the variance estimate
+        launch(Kernel{gbuffer(), previousGeometry(), objects.data(), objectCount,
+                      planeSet(derivatives), historyTest(), planes(in), sums(), kClampRadius,
+                      sv.historyClampK, planeSet(feedback[previous()]),
+                      planeSet(moments[previous()]), historyLength[previous()].data(),
+                      planes(illumination), planeSet(moments[current]),
+                      historyLength[current].data(), validity.data(), planeSet(varianceOut),
+                      sv.alpha, sv.momentsAlpha, float(sv.maxHistory), hasHistory ? 1 : 0});
+    }
+
     // How far a window kernel of this radius reads (its compile-time width, window_sums.h).
     static int windowReach(int radius) {
         return radius <= kNarrowWindow ? kNarrowWindow : kWideWindow;
@@ -341,30 +353,19 @@ struct Denoiser::Impl {
         addPass("svgf-temporal",
                 {inName, "windowSums", "position", "normal", "depth", "objectId", "derivatives",
                  "previous geometry", "feedback", "moments", "historyLength", "matrices"},
-                {"illumination", "moments", "historyLength", "validity"}, [this, in, sv] {
-                    launch(SvgfTemporalKernel{gbuffer(),
-                                              previousGeometry(),
-                                              objects.data(),
-                                              objectCount,
-                                              planeSet(derivatives),
-                                              historyTest(),
-                                              planes(*in),
-                                              sums(),
-                                              kVarianceRadius,
-                                              sv.historyClampK,
-                                              planeSet(feedback[previous()]),
-                                              planeSet(moments[previous()]),
-                                              historyLength[previous()].data(),
-                                              planes(illumination),
-                                              planeSet(moments[current]),
-                                              historyLength[current].data(),
-                                              validity.data(),
-                                              sv.alpha,
-                                              sv.momentsAlpha,
-                                              float(sv.maxHistory),
-                                              hasHistory ? 1 : 0});
-                });
-        addPass("svgf-variance", {"illumination", "moments", "historyLength", "derivatives"},
+                {"illumination", "moments", "historyLength", "validity", "illumination+variance"},
+                [this, in, sv] { launchSvgfTemporal<SvgfTemporalKernel>(*in, sv); });
+        // The pixels whose bilinear taps all failed, again with the 3x3 search (few: sparse).
+        addPass("svgf-temporal-search",
+                {inName, "windowSums", "position", "normal", "depth", "objectId", "derivatives",
+                 "previous geometry", "feedback", "moments", "historyLength", "matrices",
+                 "validity"},
+                {"illumination", "moments", "historyLength", "validity", "illumination+variance"},
+                [this, in, sv] { launchSvgfTemporal<SvgfTemporalSearchKernel>(*in, sv); });
+        // Short histories only (sparse): the temporal passes wrote the rest.
+        addPass("svgf-variance",
+                {"illumination", "moments", "historyLength", "derivatives",
+                 "illumination+variance"},
                 {"illumination+variance"}, [this, terms] {
                     // The moments pass uses Falcor's wider luminance tolerance: no variance yet.
                     SvgfTerms wide = terms;
@@ -373,7 +374,7 @@ struct Denoiser::Impl {
                     launch(SvgfVarianceKernel{gbuffer(), planeSet(derivatives),
                                               planes(illumination), planeSet(moments[current]),
                                               historyLength[current].data(), planeSet(varianceOut),
-                                              wide, kShortHistory, kVarianceRadius});
+                                              wide, kShortHistory});
                 });
         // Iterations read the variance pass's output (kept for the debug view), then ping-pong
         // between filterA and filterB; the feedback iteration writes the next frame's colour

@@ -72,6 +72,7 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
     DeviceBuffer<float> illumination[2] = {h.buffer(4), h.buffer(4)};
     DeviceBuffer<float> moments[2] = {h.buffer(2), h.buffer(2)};
     DeviceBuffer<float> length[2] = {h.buffer(1), h.buffer(1)};
+    DeviceBuffer<float> filterInput = h.buffer(4);
     DeviceBuffer<float> normalPlanes = h.buffer(3);
     for (int y = 0; y < hgt; ++y)
         for (int x = 0; x < w; ++x) {
@@ -113,6 +114,7 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
                                             h.planeSet(moments[cur]),
                                             length[cur].data(),
                                             h.validity.data(),
+                                            h.planeSet(filterInput),
                                             0.0f,
                                             0.0f,
                                             32.0f,

@@ -28,6 +28,7 @@
     X(AccumulateKernel)          \
     X(AccumulateWideKernel)      \
     X(SvgfTemporalKernel)        \
+    X(SvgfTemporalSearchKernel)  \
     X(SvgfVarianceKernel)        \
     X(SvgfAtrousKernel)          \
     X(ModulateKernel)

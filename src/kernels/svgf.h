@@ -48,7 +48,14 @@ RTD_HOST_DEVICE RTD_INLINE float svgfTapMask(const SvgfTerms& t, std::int32_t ce
     return ok ? 1.0f : 0.0f;
 }
 
-struct SvgfTemporalKernel {
+// Two passes share this body: Search3x3 = false runs on every pixel with the bilinear taps
+// (branch-free, vectorised on the CPU); Search3x3 = true then revisits only the object pixels
+// whose bilinear taps all failed (code kReprojectionOtherObject) and redoes them with the 3x3
+// search. Those are few (disocclusion edges), so the second pass is a cheap sparse one and the
+// first does not pay for nine taps everywhere.
+template <bool Search3x3>
+struct SvgfTemporal {
+    static constexpr bool kSparse = Search3x3;  // the CPU launcher keeps it scalar
     GBufferView g;
     PreviousGeometry previous;
     const ObjectReprojection* objects;
@@ -66,6 +73,9 @@ struct SvgfTemporalKernel {
     PlaneSet moments;      // out, 2 planes: luminance mean, variance
     float* length;         // out: frames of history, 1 after a disocclusion
     std::uint8_t* validity;
+    // out: rgb + the moments' variance, the A-Trous input; written here rather than copied by
+    // the variance pass (one pass less over 4 planes), which revises only short histories.
+    PlaneSet filterInput;
     float alpha, momentsAlpha, maxHistory;
     int hasHistory;
 
@@ -74,9 +84,12 @@ struct SvgfTemporalKernel {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
+        if constexpr (Search3x3) {
+            if (validity[i] != kReprojectionOtherObject || g.objectId[i] < 0) return;
+        }
         Float3 current = radiance.load(i);
-        auto taps = findHistory<true>(g, i, previous, objects, objectCount, derivatives, test,
-                                      hasHistory);
+        auto taps = findHistory<Search3x3>(g, i, previous, objects, objectCount, derivatives,
+                                           test, hasHistory);
         validity[i] = taps.code;
         bool object = g.objectId[i] >= 0;
         bool valid = taps.code == kReprojectionValid;
@@ -133,26 +146,34 @@ struct SvgfTemporalKernel {
         // Equal weights for the first frames of a history, then the exponential average.
         float a1 = maxf(alpha, 1.0f / h), a2 = maxf(momentsAlpha, 1.0f / h);
         float d = l - mean;
-        illumination.store(i, history * (1.0f - a1) + current * a1);
+        Float3 result = history * (1.0f - a1) + current * a1;
+        float newVariance = object ? (1.0f - a2) * (variance + a2 * d * d) : 0.0f;
+        illumination.store(i, result);
         moments.at(0, i) = object ? mean + a2 * d : 0.0f;
-        moments.at(1, i) = object ? (1.0f - a2) * (variance + a2 * d * d) : 0.0f;
+        moments.at(1, i) = newVariance;
         length[i] = object ? h : 0.0f;
+        filterInput.rgb().store(i, result);
+        filterInput.at(3, i) = newVariance;
     }
 };
+using SvgfTemporalKernel = SvgfTemporal<false>;
+using SvgfTemporalSearchKernel = SvgfTemporal<true>;
 
-// Variance per pixel: from the temporal moments, or where fewer than `shortHistory` frames are
-// accumulated, from the moments of a 7x7 edge-aware neighbourhood (which also filters the
-// illumination), boosted by shortHistory / h for the first frames as in the paper.
+// Variance where fewer than `shortHistory` frames are accumulated: from the moments of a 7x7
+// edge-aware neighbourhood (which also filters the illumination), boosted by shortHistory / h
+// for the first frames as in the paper. Elsewhere the temporal pass's output (the moments'
+// variance) stands. Sparse: most pixels have a long history after the first frames.
 struct SvgfVarianceKernel {
+    static constexpr bool kSparse = true;  // the CPU launcher keeps it scalar
     GBufferView g;
     PlaneSet derivatives;
     Planes3 illumination;
     PlaneSet moments;
     const float* length;
-    PlaneSet out;  // rgb + variance
+    PlaneSet out;  // rgb + variance (SvgfTemporal's filterInput), revised in place
     SvgfTerms terms;
     float shortHistory;
-    int radius;
+    static constexpr int kRadius = 3;  // 7x7, unrolled
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
@@ -163,11 +184,7 @@ struct SvgfVarianceKernel {
         // The history length is a bilinear mix of the taps' lengths: a pixel with 4 frames
         // everywhere may hold 3.9999998, depending on how each back end rounds. The tolerance
         // keeps the branch the same on every back end.
-        if (id < 0 || h >= shortHistory - 1e-3f) {
-            out.rgb().store(i, c);
-            out.at(3, i) = maxf(moments.at(1, i), 0.0f);
-            return;
-        }
+        if (id < 0 || h >= shortHistory - 1e-3f) return;
         float zI = g.depth[i], dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
         Float3 nI = g.normal.load(i);
         float lI = luminance(c);
@@ -177,8 +194,10 @@ struct SvgfVarianceKernel {
         float centreMean = moments.at(0, i);
         Float3 sum;
         float m1 = 0.0f, m2 = 0.0f, sumW = 0.0f;
-        for (int dy = -radius; dy <= radius; ++dy)
-            for (int dx = -radius; dx <= radius; ++dx) {
+        RTD_UNROLL
+        for (int dy = -kRadius; dy <= kRadius; ++dy)
+            RTD_UNROLL
+            for (int dx = -kRadius; dx <= kRadius; ++dx) {
                 PixelIndex j = i + L.offset(dx, dy);
                 Float3 cj = illumination.load(j);
                 float logW =

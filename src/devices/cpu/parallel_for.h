@@ -18,6 +18,17 @@ void flushDenormalsToZero() {
 #endif
 }
 
+// A kernel that declares `static constexpr bool kSparse = true` does real work on few pixels
+// and returns at once on the rest: vectorised, it would do the work on every lane, so its loop
+// stays scalar.
+template <class Kernel>
+constexpr bool isSparse() {
+    if constexpr (requires { Kernel::kSparse; })
+        return Kernel::kSparse;
+    else
+        return false;
+}
+
 template <class Kernel>
 void parallelFor2D(int width, int height, const Kernel& kernel) {
 #pragma omp parallel
@@ -25,10 +36,17 @@ void parallelFor2D(int width, int height, const Kernel& kernel) {
         flushDenormalsToZero();
 #pragma omp for schedule(dynamic, 4)
         for (int y = 0; y < height; ++y) {
+            if constexpr (isSparse<Kernel>()) {
+#if defined(__clang__)
+#pragma clang loop vectorize(disable)
+#endif
+                for (int x = 0; x < width; ++x) kernel(x, y);
+            } else {
 #if !defined(RTD_CPU_SCALAR)
 #pragma omp simd
 #endif
-            for (int x = 0; x < width; ++x) kernel(x, y);
+                for (int x = 0; x < width; ++x) kernel(x, y);
+            }
         }
     }
 }
