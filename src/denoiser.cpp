@@ -190,9 +190,17 @@ struct Denoiser::Impl {
         layout.planeSize = int(planeSize);
         std::size_t n = pixels(), padded = std::size_t(planeSize);
         Device& d = *device;
-        for (auto* b : {&noisy, &despeckled, &position, &albedo, &filtered, &scratch, &reprojected,
-                        &normal[0], &normal[1], &history[0], &history[1]})
+        // Only what this pipeline uses (deviceMemoryBytes() reports the total).
+        bool atrousLevels = settings.method == Method::Atrous ||
+                            (settings.method == Method::Temporal &&
+                             settings.temporal.spatialFilter == SpatialFilter::Atrous);
+        bool assignmentTemporal = settings.method == Method::Temporal;
+        for (auto* b : {&noisy, &position, &albedo, &filtered, &normal[0], &normal[1]})
             *b = planesBuffer(3);
+        if (settings.outlier.enabled) despeckled = planesBuffer(3);
+        if (atrousLevels) scratch = planesBuffer(3);
+        if (assignmentTemporal)
+            for (auto* b : {&reprojected, &history[0], &history[1]}) *b = planesBuffer(3);
         depth[0] = planesBuffer(1);
         depth[1] = planesBuffer(1);
         derivatives = planesBuffer(3);
@@ -647,6 +655,10 @@ const std::vector<PassInfo>& Denoiser::passes() const {
 const FrameStats& Denoiser::lastFrameStats() const {
     return impl_->stats;
 }
+std::size_t Denoiser::deviceMemoryBytes() const {
+    return impl_->device->allocatedBytes();
+}
+
 std::string Denoiser::deviceName() const {
     return impl_->device->name();
 }

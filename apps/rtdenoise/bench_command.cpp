@@ -136,8 +136,9 @@ int runBench(const BenchOptions& o) {
         double megapixels = double(width) * height / 1e6;
         fmt::print("\n{}x{}: reading a frame from disk {:.1f} ms (not in the figures below)\n",
                    width, height, readMs);
-        fmt::print("{:<9} {:<10} {:>10} {:>10} {:>9} {:>9} {:>10} {:>9}\n", "method", "dev",
-                   "median ms", "min ms", "upload", "download", "Mpix/s", "x scalar");
+        fmt::print("{:<9} {:<10} {:>10} {:>10} {:>9} {:>9} {:>10} {:>8} {:>9}\n", "method",
+                   "dev", "median ms", "min ms", "upload", "download", "Mpix/s", "B/pixel",
+                   "x scalar");
         for (const std::string& methodName : o.methods) {
             double scalarMs = 0.0;  // cpu-scalar's median, once timed: the speed-up baseline
             for (const std::string& deviceName : o.devices) {
@@ -167,9 +168,12 @@ int runBench(const BenchOptions& o) {
                 double med = median(t.frame);
                 if (deviceName == "cpu-scalar") scalarMs = med;
                 std::string speedUp = scalarMs > 0.0 ? fmt::format("{:.1f}", scalarMs / med) : "";
-                fmt::print("{:<9} {:<10} {:>10.2f} {:>10.2f} {:>9.2f} {:>9.2f} {:>10.1f} {:>9}\n",
-                           methodName, deviceName, med, minimum(t.frame), median(t.upload),
-                           median(t.download), megapixels / (med / 1000.0), speedUp);
+                // Device memory held per pixel: history, G-buffer copies, intermediates.
+                double bytesPerPixel = double(denoiser.deviceMemoryBytes()) / (megapixels * 1e6);
+                fmt::print(
+                    "{:<9} {:<10} {:>10.2f} {:>10.2f} {:>9.2f} {:>9.2f} {:>10.1f} {:>8.0f} {:>9}\n",
+                    methodName, deviceName, med, minimum(t.frame), median(t.upload),
+                    median(t.download), megapixels / (med / 1000.0), bytesPerPixel, speedUp);
                 std::string passes;
                 for (std::size_t p = 0; p < t.passes.size(); ++p) {
                     fmt::print("    {:<16} {:8.3f} ms\n", denoiser.passes()[p].name,
@@ -181,10 +185,11 @@ int runBench(const BenchOptions& o) {
                     "{}\n  {{\"method\": \"{}\", \"device\": \"{}\", \"device_name\": \"{}\", "
                     "\"width\": {}, \"height\": {}, \"frames\": {}, \"median_ms\": {:.4f}, "
                     "\"min_ms\": {:.4f}, \"upload_ms\": {:.4f}, \"download_ms\": {:.4f}, "
-                    "\"read_ms\": {:.4f}, \"mpix_per_s\": {:.2f}, \"passes_ms\": {{{}}}}}",
+                    "\"read_ms\": {:.4f}, \"mpix_per_s\": {:.2f}, \"device_bytes\": {}, "
+                    "\"passes_ms\": {{{}}}}}",
                     firstCase ? "" : ",", methodName, deviceName, denoiser.deviceName(), width,
                     height, o.frames, med, minimum(t.frame), median(t.upload), median(t.download),
-                    readMs, megapixels / (med / 1000.0), passes);
+                    readMs, megapixels / (med / 1000.0), denoiser.deviceMemoryBytes(), passes);
                 firstCase = false;
             }
         }

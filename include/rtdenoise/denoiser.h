@@ -58,6 +58,9 @@ class Denoiser {
     const std::vector<PassInfo>& passes() const;
     const FrameStats& lastFrameStats() const;
     std::string deviceName() const;
+    // Device memory this denoiser holds for the current frame size: history, G-buffer copies,
+    // intermediate images, staging (0 before the first frame).
+    std::size_t deviceMemoryBytes() const;
 
     // A debug view of the last frame (black where the method has no such data).
     Image debugImage(DebugView view) const;

@@ -31,6 +31,15 @@ class Device {
 #define RTD_DECLARE_LAUNCH(K) virtual void launch(const K& kernel, int width, int height) = 0;
     RTD_FOR_EACH_KERNEL(RTD_DECLARE_LAUNCH)
 #undef RTD_DECLARE_LAUNCH
+
+    // Bytes held in DeviceBuffers on this device (what a denoiser keeps resident).
+    std::size_t allocatedBytes() const { return allocatedBytes_; }
+    void noteAllocation(std::size_t bytes, bool allocated) {
+        allocatedBytes_ = allocated ? allocatedBytes_ + bytes : allocatedBytes_ - bytes;
+    }
+
+  private:
+    std::size_t allocatedBytes_ = 0;
 };
 
 // Throws rtd::Error(DeviceFailure) if the requested device is not available.
@@ -48,7 +57,9 @@ class DeviceBuffer {
     DeviceBuffer(Device& device, std::size_t count)
         : device_(&device),
           data_(static_cast<T*>(device.allocate(count * sizeof(T)))),
-          count_(count) {}
+          count_(count) {
+        device.noteAllocation(bytes(), true);
+    }
     ~DeviceBuffer() { reset(); }
     DeviceBuffer(DeviceBuffer&& o) noexcept { swap(o); }
     DeviceBuffer& operator=(DeviceBuffer&& o) noexcept {
@@ -59,7 +70,10 @@ class DeviceBuffer {
     DeviceBuffer& operator=(const DeviceBuffer&) = delete;
 
     void reset() noexcept {
-        if (data_) device_->release(data_);
+        if (data_) {
+            device_->noteAllocation(bytes(), false);
+            device_->release(data_);
+        }
         data_ = nullptr;
         count_ = 0;
     }

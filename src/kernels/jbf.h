@@ -31,6 +31,7 @@ struct JbfKernel {
             PixelIndex row = i + L.offset(0, dy);
             float dy2 = float(dy * dy);
             // Branch-free inner loop (border and background taps get weight 0): vectorises.
+            RTD_SHORT_VECTOR_LOOP
             for (int dx = -radius; dx <= radius; ++dx) {
                 PixelIndex j = row + dx;
                 Float3 cj = in.load(j);
