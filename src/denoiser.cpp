@@ -111,6 +111,7 @@ struct Denoiser::Impl {
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
     int objectCount = 0;  // K of the current frame
+    float* outputTarget = nullptr;  // this frame's interleaved output, as the device sees it
 
     // The previous frame's matrices (for back-projection).
     std::vector<Matrix4> previousObjectToWorld;
@@ -195,8 +196,8 @@ struct Denoiser::Impl {
                             (settings.method == Method::Temporal &&
                              settings.temporal.spatialFilter == SpatialFilter::Atrous);
         bool assignmentTemporal = settings.method == Method::Temporal;
-        for (auto* b : {&noisy, &position, &albedo, &filtered, &normal[0], &normal[1]})
-            *b = planesBuffer(3);
+        for (auto* b : {&noisy, &position, &albedo, &normal[0], &normal[1]}) *b = planesBuffer(3);
+        if (settings.method != Method::Svgf) filtered = planesBuffer(3);
         if (settings.outlier.enabled) despeckled = planesBuffer(3);
         if (atrousLevels) scratch = planesBuffer(3);
         if (assignmentTemporal)
@@ -447,7 +448,8 @@ struct Denoiser::Impl {
                 addSvgfPasses(in, inName);
                 break;
         }
-        // Multiply the albedo back (a copy without one) into `filtered`, the output.
+        // Multiply the albedo back (1 without one), written straight into the caller's
+        // interleaved output (or the staging buffer a GPU copies it from).
         std::string resultName = settings.method == Method::Temporal ? "history"
                                  : settings.method == Method::Svgf   ? slotName(svgfResult)
                                                                      : "filtered";
@@ -455,8 +457,10 @@ struct Denoiser::Impl {
             Planes3 result = settings.method == Method::Temporal ? planes(history[current])
                              : settings.method == Method::Svgf   ? planes(slot(svgfResult))
                                                                  : planes(filtered);
-            launch(ModulateKernel{layout, result, planes(albedo), planes(filtered)});
+            launch(ModulateKernel{layout, result, planes(albedo), outputTarget});
         });
+        if (int(pipeline.size()) >= Device::kTimestampSlots)
+            throw Error(ErrorCode::InvalidArgument, "settings: too many passes to time");
         for (const Pass& p : pipeline) passInfos.push_back(p.info);
         stats.passMilliseconds.assign(pipeline.size(), 0.0);
     }
@@ -542,17 +546,21 @@ struct Denoiser::Impl {
         if (temporal) uploadObjectMatrices(f);
         stats.uploadMilliseconds = millisecondsSince(start);
 
+        bool direct = device->sharesHostMemory() || f.space == MemorySpace::Device;
+        outputTarget = direct ? outputRgb : stageOutput.data();
+        // Each pass's time from device timestamps: one wait for the whole frame, not one per
+        // pass (on a GPU a wait costs about as much as a small kernel).
+        device->recordTimestamp(0);
         for (std::size_t p = 0; p < pipeline.size(); ++p) {
-            auto passStart = Clock::now();
             pipeline[p].run();
-            device->synchronize();
-            stats.passMilliseconds[p] = millisecondsSince(passStart);
+            device->recordTimestamp(int(p) + 1);
         }
+        device->synchronize();
+        for (std::size_t p = 0; p < pipeline.size(); ++p)
+            stats.passMilliseconds[p] = device->millisecondsBetween(int(p), int(p) + 1);
         stats.nonFiniteReplaced = device->sumBytes(nonFinite.data(), pixels());
 
         start = Clock::now();
-        bool direct = device->sharesHostMemory() || f.space == MemorySpace::Device;
-        launch(PackKernel{layout, planes(filtered), direct ? outputRgb : stageOutput.data()});
         if (!direct)
             device->copyToHost(outputRgb, stageOutput.data(), 3 * pixels() * sizeof(float));
         device->synchronize();

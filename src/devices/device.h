@@ -32,6 +32,12 @@ class Device {
     RTD_FOR_EACH_KERNEL(RTD_DECLARE_LAUNCH)
 #undef RTD_DECLARE_LAUNCH
 
+    // Timestamps in the device's own order of work (slot 0 up to kTimestampSlots - 1), read
+    // after synchronize(): the time between two, in milliseconds.
+    static constexpr int kTimestampSlots = 64;
+    virtual void recordTimestamp(int slot) = 0;
+    virtual double millisecondsBetween(int firstSlot, int secondSlot) = 0;
+
     // Bytes held in DeviceBuffers on this device (what a denoiser keeps resident).
     std::size_t allocatedBytes() const { return allocatedBytes_; }
     void noteAllocation(std::size_t bytes, bool allocated) {

@@ -34,15 +34,15 @@ struct IngestKernel {
             c[k] = finite ? v : 0.0f;
         }
         // Background and non-finite albedo: factor 1 (nothing to demodulate, or untrustworthy).
-        Float3 a = make3(1.0f, 1.0f, 1.0f);
-        if (albedoRgb && idIn[s] >= 0) {
-            float r = albedoRgb[3 * s], gr = albedoRgb[3 * s + 1], b = albedoRgb[3 * s + 2];
-            bool finite = isFinite(r) && isFinite(gr) && isFinite(b);
-            // Per component, not a choice between two vectors (which stops vectorisation).
-            a.x = finite ? maxf(r, albedoEpsilon) : 1.0f;
-            a.y = finite ? maxf(gr, albedoEpsilon) : 1.0f;
-            a.z = finite ? maxf(b, albedoEpsilon) : 1.0f;
-        }
+        // Selects per component, not a branch choosing a whole vector: that would stop the CPU
+        // vectorising the kernel. Without an albedo, the beauty is read in its place (unused).
+        const float* albedoIn = albedoRgb ? albedoRgb : beautyRgb;
+        float r = albedoIn[3 * s], gr = albedoIn[3 * s + 1], b = albedoIn[3 * s + 2];
+        bool use = albedoRgb && idIn[s] >= 0 && isFinite(r) && isFinite(gr) && isFinite(b);
+        Float3 a;
+        a.x = use ? maxf(r, albedoEpsilon) : 1.0f;
+        a.y = use ? maxf(gr, albedoEpsilon) : 1.0f;
+        a.z = use ? maxf(b, albedoEpsilon) : 1.0f;
         albedo.store(i, a);
         beauty.store(i, make3(c[0] / a.x, c[1] / a.y, c[2] / a.z));
         normal.store(i, make3(normalRgb[3 * s], normalRgb[3 * s + 1], normalRgb[3 * s + 2]));
@@ -51,21 +51,6 @@ struct IngestKernel {
         depth[i] = depthIn[s];
         objectId[i] = idIn[s];
         nonFiniteCount[s] = std::uint8_t(bad);
-    }
-};
-
-// Planar RGB back to the caller's interleaved RGB.
-struct PackKernel {
-    Layout layout;
-    Planes3 color;
-    float* rgbOut;
-
-    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        PixelIndex s = PixelIndex(y) * layout.width + x;
-        Float3 c = color.load(layout.index(x, y));
-        rgbOut[3 * s] = c.x;
-        rgbOut[3 * s + 1] = c.y;
-        rgbOut[3 * s + 2] = c.z;
     }
 };
 

@@ -14,7 +14,6 @@
 
 #define RTD_FOR_EACH_KERNEL(X)   \
     X(IngestKernel)              \
-    X(PackKernel)                \
     X(LuminanceRowSumsKernel)    \
     X(LuminanceRowSumsWideKernel) \
     X(ColorRowSumsKernel)        \

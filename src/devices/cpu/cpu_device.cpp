@@ -1,5 +1,7 @@
 #include <omp.h>
 
+#include <array>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <new>
@@ -48,6 +50,13 @@ class CpuDevice final : public Device {
     }
     void fill(void* dst, int value, std::size_t bytes) override { std::memset(dst, value, bytes); }
     void synchronize() override {}
+    // Kernels run synchronously here: a timestamp is the clock when it is recorded.
+    void recordTimestamp(int slot) override {
+        if (slot >= 0 && slot < kTimestampSlots) stamps_[slot] = std::chrono::steady_clock::now();
+    }
+    double millisecondsBetween(int first, int second) override {
+        return std::chrono::duration<double, std::milli>(stamps_[second] - stamps_[first]).count();
+    }
     long long sumBytes(const std::uint8_t* data, std::size_t n) override {
         long long total = 0;
 #pragma omp parallel for reduction(+ : total) schedule(static)
@@ -64,6 +73,7 @@ class CpuDevice final : public Device {
 
   private:
     const CpuKernelTable& kernels_;
+    std::array<std::chrono::steady_clock::time_point, kTimestampSlots> stamps_{};
 };
 
 }  // namespace

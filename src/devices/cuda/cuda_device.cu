@@ -41,8 +41,10 @@ public:
         name_ = std::string("cuda (") + properties.name + ")";
         check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
         check(cudaMalloc(&counter_, sizeof(unsigned long long)), "cudaMalloc");
+        for (cudaEvent_t& e : events_) check(cudaEventCreate(&e), "cudaEventCreate");
     }
     ~CudaDevice() override {
+        for (cudaEvent_t e : events_) cudaEventDestroy(e);
         cudaFree(counter_);
         cudaStreamDestroy(stream_);
     }
@@ -67,6 +69,16 @@ public:
         check(cudaMemsetAsync(dst, value, bytes, stream_), "cudaMemsetAsync");
     }
     void synchronize() override { check(cudaStreamSynchronize(stream_), "synchronize"); }
+    // Events in the stream: no host wait between passes.
+    void recordTimestamp(int slot) override {
+        if (slot >= 0 && slot < kTimestampSlots)
+            check(cudaEventRecord(events_[slot], stream_), "cudaEventRecord");
+    }
+    double millisecondsBetween(int first, int second) override {
+        float ms = 0.0f;
+        check(cudaEventElapsedTime(&ms, events_[first], events_[second]), "cudaEventElapsedTime");
+        return ms;
+    }
     long long sumBytes(const std::uint8_t* data, std::size_t n) override {
         check(cudaMemsetAsync(counter_, 0, sizeof(unsigned long long), stream_), "memset");
         sumBytesKernel<<<256, 256, 0, stream_>>>(data, n, counter_);
@@ -91,6 +103,7 @@ private:
     std::string name_;
     cudaStream_t stream_ = nullptr;
     unsigned long long* counter_ = nullptr;
+    cudaEvent_t events_[kTimestampSlots] = {};
 };
 
 }  // namespace
