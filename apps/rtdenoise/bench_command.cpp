@@ -146,7 +146,16 @@ int runBench(const BenchOptions& o) {
                 settings.method = kBenchMethods.at(methodName);
                 settings.device = kBenchDevices.at(deviceName).type;
                 settings.cpuIsa = kBenchDevices.at(deviceName).isa;
-                Denoiser denoiser(settings);
+                std::unique_ptr<Denoiser> created;
+                try {
+                    created = std::make_unique<Denoiser>(settings);
+                } catch (const Error& e) {
+                    // A device or instruction set this machine lacks: say so, time the rest.
+                    if (e.code() != ErrorCode::DeviceFailure) throw;
+                    fmt::print("{:<9} {:<10} skipped: {}\n", methodName, deviceName, e.what());
+                    continue;
+                }
+                Denoiser& denoiser = *created;
                 Image output;
                 for (const Frame& f : frames) denoiser.processFrame(f, output);  // warm-up
                 Timing t;
