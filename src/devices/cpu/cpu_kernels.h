@@ -1,6 +1,8 @@
-// The CPU kernel launchers, compiled once per instruction set (cpu_kernels.cpp with -march for
-// x86-64, x86-64-v3 and x86-64-v4) and chosen at run time for the processor at hand, as OIDN and
-// ISPC do: one binary runs everywhere and uses AVX-512 where the processor has it.
+// The CPU kernel launchers, compiled once per instruction set (cpu_kernels_<set>.cpp: scalar,
+// SSE2 = x86-64, AVX2 = x86-64-v3, AVX-512 = x86-64-v4) and chosen at run time for the processor
+// at hand, as OIDN and ISPC do: one binary runs everywhere and uses AVX-512 where the processor
+// has it. The scalar copy (the same kernels, not vectorised) is the baseline speed-ups are
+// measured against.
 #pragma once
 
 #include "kernels/kernel_list.h"

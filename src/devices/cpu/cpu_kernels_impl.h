@@ -1,8 +1,7 @@
 // The kernel launchers for one instruction set, included by cpu_kernels_<set>.cpp, each compiled
-// with its own -march flag (see CMakeLists.txt). Everything it defines
-// has internal linkage (anonymous namespace, always-inlined kernels), so the copies built for
-// different instruction sets never stand in for one another at link time.
-// No include guard: one inclusion per translation unit.
+// with its own -march flag (see CMakeLists.txt). Everything it defines has internal linkage
+// (anonymous namespace, always-inlined kernels), so the copies built for different instruction
+// sets never stand in for one another at link time. No include guard: one inclusion per file.
 #include "devices/cpu/cpu_kernels.h"
 #include "devices/cpu/parallel_for.h"
 
