@@ -1,10 +1,11 @@
-// Google Benchmark: ms per frame of each method on the course scene (box, 512x512) when it is
-// beside the repository (synthetic frames of the same size otherwise), with each pass's mean time
-// as a counter, and the straightforward JBF as the baseline. Disk I/O is outside the timing.
+// Google Benchmark: ms per frame of each method on the course scene (box, 512x512, beside the
+// repository), with each pass's mean time as a counter; a case per kernel (BM_Pass/...); and the
+// straightforward JBF as the baseline. Disk I/O is outside the timing.
 //   build/release/bench/bench_methods --benchmark_min_time=2
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "baseline_jbf.h"
@@ -110,6 +111,56 @@ BENCHMARK(BM_TemporalAtrous)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Svgf)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_TemporalJbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 
+// One case per kernel: each pass of the svgf and temporal pipelines (every kernel the
+// denoiser has is in one of them, or in jbf/atrous above), timed alone with the device's pass
+// timestamps (manual time), the frames run in order as above.
+void runPass(benchmark::State& state, Method method, std::size_t pass) {
+    if (frames().empty()) {
+        state.SkipWithError("course data not found beside the repository");
+        return;
+    }
+    DenoiserSettings settings;
+    settings.method = method;
+    settings.device = DeviceType::Cpu;
+    Denoiser denoiser(settings);
+    Image output;
+    for (const Frame& f : frames()) denoiser.processFrame(f, output);
+    std::size_t i = 0;
+    for (auto _ : state) {
+        denoiser.processFrame(frames()[pingPong(i++, frames().size())], output);
+        state.SetIterationTime(denoiser.lastFrameStats().passMilliseconds[pass] / 1000.0);
+    }
+    state.SetLabel(denoiser.passes()[pass].name);
+}
+
+void registerPassBenchmarks() {
+    for (Method method : {Method::Temporal, Method::Svgf}) {
+        DenoiserSettings settings;
+        settings.method = method;
+        settings.device = DeviceType::Cpu;
+        Denoiser probe(settings);
+        for (std::size_t p = 0; p < probe.passes().size(); ++p) {
+            std::string name =
+                std::string("BM_Pass/") + toString(method) + "/" + probe.passes()[p].name;
+            benchmark::RegisterBenchmark(name.c_str(), [method, p](benchmark::State& state) {
+                runPass(state, method, p);
+            })
+                ->Unit(benchmark::kMillisecond)
+                ->UseManualTime()
+                // A fixed count: a pass is a small part of a frame, and Google Benchmark would
+                // otherwise run frames until the pass alone adds up to its minimum time.
+                ->Iterations(20);
+        }
+    }
+}
+
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+    registerPassBenchmarks();
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

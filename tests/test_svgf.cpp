@@ -134,7 +134,9 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
         double variance = sum2 / count - std::pow(sum / count, 2);
         if (n == 1) firstVariance = variance;
         EXPECT_NEAR(variance * n / firstVariance, 1.0, 0.15) << "after " << n << " frames";
-        if (n >= 8) EXPECT_NEAR(varianceEstimate / count, 1.0 / 12.0, 0.012) << n;
+        if (n >= 8) {
+            EXPECT_NEAR(varianceEstimate / count, 1.0 / 12.0, 0.012) << n;
+        }
     }
 }
 
