@@ -396,8 +396,13 @@ struct Denoiser::Impl {
             addPass(
                 fmt::format("svgf-atrous{}", it), {slotName(src), "normal", "depth", "derivatives"},
                 {slotName(dst)}, [this, terms, stride, src, dst] {
-                    launch(SvgfAtrousKernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
-                                            planeSet(slot(dst)), stride, terms});
+                    PlaneSet from = planeSet(slot(src)), to = planeSet(slot(dst));
+                    if (terms.sigmaNormal == 128.0f)  // the paper's: no logarithm per tap
+                        launch(SvgfAtrousNormal128Kernel{gbuffer(), planeSet(derivatives), from,
+                                                         to, stride, terms});
+                    else
+                        launch(SvgfAtrousKernel{gbuffer(), planeSet(derivatives), from, to,
+                                                stride, terms});
                 });
             src = dst;
         }

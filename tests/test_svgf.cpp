@@ -37,6 +37,40 @@ TEST(SvgfKernels, VarianceIsPropagatedWithSquaredWeights) {
     }
 }
 
+TEST(SvgfKernels, NormalPowerBySquaringsEqualsTheLogarithmForm) {
+    // sigma_n = 128 both ways (7 squarings; exp of 128 ln n.n') over normals tilted by up to
+    // ~25 degrees (weights from 1 down to ~1e-6) and a noisy colour: the same output.
+    Harness h(24, 24, 8);
+    DeviceBuffer<float> in = h.buffer(4), generic = h.buffer(4), squarings = h.buffer(4),
+                        derivatives = h.buffer(3);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> tilt(-0.45f, 0.45f), value(0.2f, 1.0f);
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 24; ++x) {
+            auto i = h.layout.index(x, y);
+            h.planes(h.normal).store(i, normalize(make3(tilt(rng), tilt(rng), -1.0f)));
+            h.planeSet(in).rgb().store(i, make3(value(rng), value(rng), value(rng)));
+            h.planeSet(in).at(3, i) = 0.05f;
+        }
+    for (int stride : {1, 2}) {
+        h.device->launch(SvgfAtrousKernel{h.gbuffer(), h.planeSet(derivatives), h.planeSet(in),
+                                          h.planeSet(generic), stride, paperTerms()},
+                         24, 24);
+        h.device->launch(SvgfAtrousNormal128Kernel{h.gbuffer(), h.planeSet(derivatives),
+                                                   h.planeSet(in), h.planeSet(squarings), stride,
+                                                   paperTerms()},
+                         24, 24);
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 24; ++x) {
+                auto i = h.layout.index(x, y);
+                for (int c = 0; c < 4; ++c)
+                    EXPECT_NEAR(h.planeSet(squarings).at(c, i), h.planeSet(generic).at(c, i),
+                                2e-5f * std::abs(h.planeSet(generic).at(c, i)) + 1e-7f)
+                        << "stride " << stride << " (" << x << ", " << y << ") plane " << c;
+            }
+    }
+}
+
 TEST(SvgfKernels, LuminanceEdgeStopsScaleWithTheStandardDeviation) {
     // A luminance step of 1 between halves: with variance 1e-4 (stddev 0.01) it is 25 sigma_l
     // wide and nothing crosses; with variance 100 (stddev 10) it is blurred.

@@ -30,4 +30,5 @@
     X(SvgfTemporalSearchKernel)  \
     X(SvgfVarianceKernel)        \
     X(SvgfAtrousKernel)          \
+    X(SvgfAtrousNormal128Kernel) \
     X(ModulateKernel)
