@@ -142,9 +142,8 @@ void registerPassBenchmarks() {
         for (std::size_t p = 0; p < probe.passes().size(); ++p) {
             std::string name =
                 std::string("BM_Pass/") + toString(method) + "/" + probe.passes()[p].name;
-            benchmark::RegisterBenchmark(name.c_str(), [method, p](benchmark::State& state) {
-                runPass(state, method, p);
-            })
+            benchmark::RegisterBenchmark(
+                name.c_str(), [method, p](benchmark::State& state) { runPass(state, method, p); })
                 ->Unit(benchmark::kMillisecond)
                 ->UseManualTime()
                 // A fixed count: a pass is a small part of a frame, and Google Benchmark would

@@ -110,7 +110,7 @@ struct Denoiser::Impl {
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
-    int objectCount = 0;  // K of the current frame
+    int objectCount = 0;            // K of the current frame
     float* outputTarget = nullptr;  // this frame's interleaved output, as the device sees it
 
     // The previous frame's matrices (for back-projection).
@@ -148,13 +148,28 @@ struct Denoiser::Impl {
     template <class Kernel>
     void launchSvgfTemporal(const DeviceBuffer<float>& in, const SvgfSettings& sv) {
         constexpr int kClampRadius = 3;  // 7x7, as the variance estimate
-        launch(Kernel{gbuffer(), previousGeometry(), objects.data(), objectCount,
-                      planeSet(derivatives), historyTest(), planes(in), sums(), kClampRadius,
-                      sv.historyClampK, planeSet(feedback[previous()]),
-                      planeSet(moments[previous()]), historyLength[previous()].data(),
-                      planes(illumination), planeSet(moments[current]),
-                      historyLength[current].data(), validity.data(), planeSet(varianceOut),
-                      sv.alpha, sv.momentsAlpha, float(sv.maxHistory), hasHistory ? 1 : 0});
+        launch(Kernel{gbuffer(),
+                      previousGeometry(),
+                      objects.data(),
+                      objectCount,
+                      planeSet(derivatives),
+                      historyTest(),
+                      planes(in),
+                      sums(),
+                      kClampRadius,
+                      sv.historyClampK,
+                      planeSet(feedback[previous()]),
+                      planeSet(moments[previous()]),
+                      historyLength[previous()].data(),
+                      planes(illumination),
+                      planeSet(moments[current]),
+                      historyLength[current].data(),
+                      validity.data(),
+                      planeSet(varianceOut),
+                      sv.alpha,
+                      sv.momentsAlpha,
+                      float(sv.maxHistory),
+                      hasHistory ? 1 : 0});
     }
 
     // How far a window kernel of this radius reads (its compile-time width, window_sums.h).
@@ -266,10 +281,15 @@ struct Denoiser::Impl {
             DeviceBuffer<float>* dst = toFiltered ? &filtered : &scratch;
             std::string dstName = last ? "filtered" : fmt::format("atrous{}", level);
             int stride = 1 << level;
-            addPass(fmt::format("atrous{}", level), {srcName, "normal", "position", "objectId"},
-                    {dstName}, [this, src, dst, stride, edges] {
+            addPass(
+                fmt::format("atrous{}", level), {srcName, "normal", "position", "objectId"},
+                {dstName}, [this, src, dst, stride, edges] {
+                    if (oppositeNormalsVanish(edges))  // no square root per tap
+                        launch(AtrousNarrowNormalKernel{gbuffer(), planes(*src), planes(*dst),
+                                                        stride, edges});
+                    else
                         launch(AtrousKernel{gbuffer(), planes(*src), planes(*dst), stride, edges});
-                    });
+                });
             src = dst;
             srcName = dstName;
         }
@@ -365,26 +385,25 @@ struct Denoiser::Impl {
                 {"illumination", "moments", "historyLength", "validity", "illumination+variance"},
                 [this, in, sv] { launchSvgfTemporal<SvgfTemporalKernel>(*in, sv); });
         // The pixels whose bilinear taps all failed, again with the 3x3 search (few: sparse).
-        addPass("svgf-temporal-search",
-                {inName, "windowSums", "position", "normal", "depth", "objectId", "derivatives",
-                 "previous geometry", "feedback", "moments", "historyLength", "matrices",
-                 "validity"},
-                {"illumination", "moments", "historyLength", "validity", "illumination+variance"},
-                [this, in, sv] { launchSvgfTemporal<SvgfTemporalSearchKernel>(*in, sv); });
+        addPass(
+            "svgf-temporal-search",
+            {inName, "windowSums", "position", "normal", "depth", "objectId", "derivatives",
+             "previous geometry", "feedback", "moments", "historyLength", "matrices", "validity"},
+            {"illumination", "moments", "historyLength", "validity", "illumination+variance"},
+            [this, in, sv] { launchSvgfTemporal<SvgfTemporalSearchKernel>(*in, sv); });
         // Short histories only (sparse): the temporal passes wrote the rest.
-        addPass("svgf-variance",
-                {"illumination", "moments", "historyLength", "derivatives",
-                 "illumination+variance"},
-                {"illumination+variance"}, [this, terms] {
-                    // The moments pass uses Falcor's wider luminance tolerance: no variance yet.
-                    SvgfTerms wide = terms;
-                    wide.sigmaLuminance = 10.0f;
-                    constexpr float kShortHistory = 4.0f;  // frames: below, estimate spatially
-                    launch(SvgfVarianceKernel{gbuffer(), planeSet(derivatives),
-                                              planes(illumination), planeSet(moments[current]),
-                                              historyLength[current].data(), planeSet(varianceOut),
-                                              wide, kShortHistory});
-                });
+        addPass(
+            "svgf-variance",
+            {"illumination", "moments", "historyLength", "derivatives", "illumination+variance"},
+            {"illumination+variance"}, [this, terms] {
+                // The moments pass uses Falcor's wider luminance tolerance: no variance yet.
+                SvgfTerms wide = terms;
+                wide.sigmaLuminance = 10.0f;
+                constexpr float kShortHistory = 4.0f;  // frames: below, estimate spatially
+                launch(SvgfVarianceKernel{gbuffer(), planeSet(derivatives), planes(illumination),
+                                          planeSet(moments[current]), historyLength[current].data(),
+                                          planeSet(varianceOut), wide, kShortHistory});
+            });
         // Iterations read the variance pass's output (kept for the debug view), then ping-pong
         // between filterA and filterB; the feedback iteration writes the next frame's colour
         // history (feedback[current]) directly, and the next iteration reads it from there.
@@ -393,17 +412,17 @@ struct Denoiser::Impl {
             bool isFeedback = it == sv.feedbackIteration;
             Slot dst = isFeedback ? Slot::Feedback : (src == Slot::A ? Slot::B : Slot::A);
             int stride = 1 << it;
-            addPass(
-                fmt::format("svgf-atrous{}", it), {slotName(src), "normal", "depth", "derivatives"},
-                {slotName(dst)}, [this, terms, stride, src, dst] {
-                    PlaneSet from = planeSet(slot(src)), to = planeSet(slot(dst));
-                    if (terms.sigmaNormal == 128.0f)  // the paper's: no logarithm per tap
-                        launch(SvgfAtrousNormal128Kernel{gbuffer(), planeSet(derivatives), from,
-                                                         to, stride, terms});
-                    else
-                        launch(SvgfAtrousKernel{gbuffer(), planeSet(derivatives), from, to,
-                                                stride, terms});
-                });
+            addPass(fmt::format("svgf-atrous{}", it),
+                    {slotName(src), "normal", "depth", "derivatives"}, {slotName(dst)},
+                    [this, terms, stride, src, dst] {
+                        PlaneSet from = planeSet(slot(src)), to = planeSet(slot(dst));
+                        if (terms.sigmaNormal == 128.0f)  // the paper's: no logarithm per tap
+                            launch(SvgfAtrousNormal128Kernel{gbuffer(), planeSet(derivatives), from,
+                                                             to, stride, terms});
+                        else
+                            launch(SvgfAtrousKernel{gbuffer(), planeSet(derivatives), from, to,
+                                                    stride, terms});
+                    });
             src = dst;
         }
         svgfResult = src;

@@ -86,6 +86,48 @@ TEST(Atrous, ConstantImageIsUnchangedAtTheBorderToo) {
         }
 }
 
+TEST(Atrous, SquareRootFreeNormalTermGivesTheSameResultWhereOppositeNormalsVanish) {
+    // sigma_normal 0.1 (the assignment's): normals in every direction, including opposite ones,
+    // and a noisy colour; the square-root-free kernel equals the general one.
+    EdgeStoppingTerms terms{1.0f / (2.0f * 0.6f * 0.6f), 1.0f / (2.0f * 0.1f * 0.1f),
+                            1.0f / (2.0f * 0.1f * 0.1f), 1};
+    ASSERT_TRUE(oppositeNormalsVanish(terms));
+    EdgeStoppingTerms wide = terms;
+    wide.normalScale = 1.0f / (2.0f * 0.5f * 0.5f);
+    EXPECT_FALSE(oppositeNormalsVanish(wide));
+    Harness h(24, 24, 8);
+    std::uint32_t state = 7;
+    auto next = [&state] {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) / float(1 << 24);
+    };
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 24; ++x) {
+            auto i = h.layout.index(x, y);
+            // Mostly facing the camera, every fourth pixel anywhere (opposite ones included).
+            Float3 n = (x + y) % 4 == 0
+                           ? make3(next() - 0.5f, next() - 0.5f, next() - 0.5f)
+                           : make3(0.3f * (next() - 0.5f), 0.3f * (next() - 0.5f), -1.0f);
+            h.planes(h.normal).store(i, normalize(n));
+            h.planes(h.a).store(i, make3(next(), next(), next()));
+        }
+    for (int stride : {1, 2}) {
+        h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms}, 24,
+                         24);
+        h.device->launch(
+            AtrousNarrowNormalKernel{h.gbuffer(), h.planes(h.a), h.planes(h.c), stride, terms}, 24,
+            24);
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 24; ++x) {
+                Float3 general = h.planes(h.b).load(h.layout.index(x, y));
+                Float3 fast = h.planes(h.c).load(h.layout.index(x, y));
+                EXPECT_NEAR(fast.x, general.x, 1e-5f * general.x + 1e-7f) << x << ", " << y;
+                EXPECT_NEAR(fast.y, general.y, 1e-5f * general.y + 1e-7f) << x << ", " << y;
+                EXPECT_NEAR(fast.z, general.z, 1e-5f * general.z + 1e-7f) << x << ", " << y;
+            }
+    }
+}
+
 TEST(Accumulate, ClampsHistoryToMeanPlusMinusKSigmaThenBlends) {
     // 3x3 image, radius 1: the centre's neighbourhood is the whole image.
     Harness h(3, 3, 1);
@@ -138,8 +180,7 @@ void expectSeparableSumsEqualDirect(int r) {
             h.planes(h.a).store(h.layout.index(x, y), make3(next(), next(), next()));
             if (x > 5 && x < 9 && y > 3 && y < 12) h.ids.data()[h.layout.index(x, y)] = -1;
         }
-    h.device->launch(ColorRowSums<MaxRadius>{h.gbuffer(), h.planes(h.a), h.sumPlanes(), r}, 23,
-                     17);
+    h.device->launch(ColorRowSums<MaxRadius>{h.gbuffer(), h.planes(h.a), h.sumPlanes(), r}, 23, 17);
     for (int y = 0; y < 17; ++y)
         for (int x = 0; x < 23; ++x) {
             double direct[7] = {0, 0, 0, 0, 0, 0, 0};

@@ -56,10 +56,10 @@ TEST(SvgfKernels, NormalPowerBySquaringsEqualsTheLogarithmForm) {
         h.device->launch(SvgfAtrousKernel{h.gbuffer(), h.planeSet(derivatives), h.planeSet(in),
                                           h.planeSet(generic), stride, paperTerms()},
                          24, 24);
-        h.device->launch(SvgfAtrousNormal128Kernel{h.gbuffer(), h.planeSet(derivatives),
-                                                   h.planeSet(in), h.planeSet(squarings), stride,
-                                                   paperTerms()},
-                         24, 24);
+        h.device->launch(
+            SvgfAtrousNormal128Kernel{h.gbuffer(), h.planeSet(derivatives), h.planeSet(in),
+                                      h.planeSet(squarings), stride, paperTerms()},
+            24, 24);
         for (int y = 0; y < 24; ++y)
             for (int x = 0; x < 24; ++x) {
                 auto i = h.layout.index(x, y);

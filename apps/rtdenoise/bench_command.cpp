@@ -136,9 +136,8 @@ int runBench(const BenchOptions& o) {
         double megapixels = double(width) * height / 1e6;
         fmt::print("\n{}x{}: reading a frame from disk {:.1f} ms (not in the figures below)\n",
                    width, height, readMs);
-        fmt::print("{:<9} {:<10} {:>10} {:>10} {:>9} {:>9} {:>10} {:>8} {:>9}\n", "method",
-                   "dev", "median ms", "min ms", "upload", "download", "Mpix/s", "B/pixel",
-                   "x scalar");
+        fmt::print("{:<9} {:<10} {:>10} {:>10} {:>9} {:>9} {:>10} {:>8} {:>9}\n", "method", "dev",
+                   "median ms", "min ms", "upload", "download", "Mpix/s", "B/pixel", "x scalar");
         for (const std::string& methodName : o.methods) {
             double scalarMs = 0.0;  // cpu-scalar's median, once timed: the speed-up baseline
             for (const std::string& deviceName : o.devices) {

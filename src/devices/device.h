@@ -39,7 +39,9 @@ class Device {
     virtual double millisecondsBetween(int firstSlot, int secondSlot) = 0;
 
     // Bytes held in DeviceBuffers on this device (what a denoiser keeps resident).
-    std::size_t allocatedBytes() const { return allocatedBytes_; }
+    std::size_t allocatedBytes() const {
+        return allocatedBytes_;
+    }
     void noteAllocation(std::size_t bytes, bool allocated) {
         allocatedBytes_ = allocated ? allocatedBytes_ + bytes : allocatedBytes_ - bytes;
     }

@@ -22,6 +22,7 @@
     X(OutlierWideKernel)         \
     X(JbfKernel)                 \
     X(AtrousKernel)              \
+    X(AtrousNarrowNormalKernel)  \
     X(GeometryDerivativesKernel) \
     X(ReprojectKernel)           \
     X(AccumulateKernel)          \

@@ -96,9 +96,8 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
         int tx = firstX + t % kSide, ty = firstY + t / kSide;
         // Taps off the screen lie in the border (object ID -1): rejected by the ID test.
         PixelIndex j = L.index(tx, ty);
-        bool ok = acceptHistory(test, id, previous.objectId[j], s.w, previous.depth[j],
-                                fwidthDepth, expectedNormal, previous.normal.load(j),
-                                fwidthNormal);
+        bool ok = acceptHistory(test, id, previous.objectId[j], s.w, previous.depth[j], fwidthDepth,
+                                expectedNormal, previous.normal.load(j), fwidthNormal);
         float wx = tx == x0 ? 1.0f - fx : tx == x0 + 1 ? fx : 0.0f;
         float wy = ty == y0 ? 1.0f - fy : ty == y0 + 1 ? fy : 0.0f;
         taps.index[t] = j;
@@ -114,12 +113,12 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     RTD_UNROLL
     for (int t = 0; t < kTaps; ++t)
         taps.weight[t] = (search ? (accepted[t] ? 1.0f : 0.0f) : taps.weight[t]) * scale;
-    taps.code = id < 0          ? kReprojectionBackground
-                : !hasHistory   ? kReprojectionNoHistory
-                : !trackable    ? kReprojectionOtherObject
-                : !onScreen     ? kReprojectionOutsideScreen
-                : !valid        ? kReprojectionOtherObject
-                                : kReprojectionValid;
+    taps.code = id < 0        ? kReprojectionBackground
+                : !hasHistory ? kReprojectionNoHistory
+                : !trackable  ? kReprojectionOtherObject
+                : !onScreen   ? kReprojectionOutsideScreen
+                : !valid      ? kReprojectionOtherObject
+                              : kReprojectionValid;
     return taps;
 }
 
@@ -140,7 +139,9 @@ struct GeometryDerivativesKernel {
     }
     RTD_HOST_DEVICE RTD_INLINE float normalChange(PixelIndex i, PixelIndex step) const {
         std::int32_t id = g.objectId[i];
-        PixelIndex j = g.objectId[i + step] == id ? i + step : g.objectId[i - step] == id ? i - step : i;
+        PixelIndex j = g.objectId[i + step] == id   ? i + step
+                       : g.objectId[i - step] == id ? i - step
+                                                    : i;
         Float3 d = g.normal.load(j) - g.normal.load(i);
         return std::sqrt(dot(d, d));
     }
@@ -174,12 +175,11 @@ struct ReprojectKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        auto taps = findHistory<false>(g, i, previous, objects, objectCount, derivatives, test,
-                                       hasHistory);
+        auto taps =
+            findHistory<false>(g, i, previous, objects, objectCount, derivatives, test, hasHistory);
         Float3 sum;  // 0 where invalid: every weight is 0
         RTD_UNROLL
-        for (int t = 0; t < taps.kCount; ++t)
-            sum += history.load(taps.index[t]) * taps.weight[t];
+        for (int t = 0; t < taps.kCount; ++t) sum += history.load(taps.index[t]) * taps.weight[t];
         reprojected.store(i, sum);
         validity[i] = taps.code;
     }

@@ -33,9 +33,8 @@ struct SvgfTerms {
 // k squarings: the same value for a quarter of the A-Trous pass's time (no logarithm per tap).
 template <int NormalSquarings>
 RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, float depthI, float depthJ,
-                                            float depthAlongOffset, Float3 normalI,
-                                            Float3 normalJ, float lumI, float lumJ,
-                                            float inversePhiLuminance) {
+                                            float depthAlongOffset, Float3 normalI, Float3 normalJ,
+                                            float lumI, float lumJ, float inversePhiLuminance) {
     float dz = depthI - depthJ;
     float slope = depthAlongOffset < 0 ? -depthAlongOffset : depthAlongOffset;
     float wz = (dz < 0 ? -dz : dz) / (t.sigmaDepth * slope + 1e-3f);
@@ -76,8 +75,8 @@ struct SvgfTemporal {
     HistoryTest test;
     Planes3 radiance;  // noisy input, demodulated by the ingest, after firefly removal
     PlaneSet rowSums;  // ColorRowSumsKernel over `radiance`: the anti-lag clamp's window
-    int clampRadius;  // <= kNarrowWindow
-    float clampK;  // 0: no clamp (the paper); else history clamped to mu +- k sigma
+    int clampRadius;   // <= kNarrowWindow
+    float clampK;      // 0: no clamp (the paper); else history clamped to mu +- k sigma
     PlaneSet previousIllumination;  // rgb (+ variance, unused here): last frame's feedback
     PlaneSet previousMoments;       // 2 planes: luminance mean, variance
     const float* previousLength;
@@ -100,8 +99,8 @@ struct SvgfTemporal {
             if (validity[i] != kReprojectionOtherObject || g.objectId[i] < 0) return;
         }
         Float3 current = radiance.load(i);
-        auto taps = findHistory<Search3x3>(g, i, previous, objects, objectCount, derivatives,
-                                           test, hasHistory);
+        auto taps = findHistory<Search3x3>(g, i, previous, objects, objectCount, derivatives, test,
+                                           hasHistory);
         validity[i] = taps.code;
         bool object = g.objectId[i] >= 0;
         bool valid = taps.code == kReprojectionValid;
@@ -207,21 +206,19 @@ struct SvgfVarianceKernel {
         Float3 sum;
         float m1 = 0.0f, m2 = 0.0f, sumW = 0.0f;
         RTD_UNROLL
-        for (int dy = -kRadius; dy <= kRadius; ++dy)
-            RTD_UNROLL
-            for (int dx = -kRadius; dx <= kRadius; ++dx) {
-                PixelIndex j = i + L.offset(dx, dy);
-                Float3 cj = illumination.load(j);
-                float w = svgfTapMask(terms, id, g.objectId[j]) *
-                          svgfWeight<-1>(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy),
-                                         nI, g.normal.load(j), lI, luminance(cj),
-                                         inverseSigmaLuminance);
-                float shifted = moments.at(0, j) - centreMean;
-                sum += cj * w;
-                m1 += shifted * w;
-                m2 += (moments.at(1, j) + shifted * shifted) * w;
-                sumW += w;
-            }
+        for (int dy = -kRadius; dy <= kRadius; ++dy) RTD_UNROLL
+        for (int dx = -kRadius; dx <= kRadius; ++dx) {
+            PixelIndex j = i + L.offset(dx, dy);
+            Float3 cj = illumination.load(j);
+            float w = svgfTapMask(terms, id, g.objectId[j]) *
+                      svgfWeight<-1>(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy), nI,
+                                     g.normal.load(j), lI, luminance(cj), inverseSigmaLuminance);
+            float shifted = moments.at(0, j) - centreMean;
+            sum += cj * w;
+            m1 += shifted * w;
+            m2 += (moments.at(1, j) + shifted * shifted) * w;
+            sumW += w;
+        }
         float inv = 1.0f / maxf(sumW, 1e-20f);  // the centre has weight 1
         out.rgb().store(i, sum * inv);
         out.at(3, i) = maxf(m2 * inv - square(m1 * inv), 0.0f) * (shortHistory / maxf(h, 1.0f));

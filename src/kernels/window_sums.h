@@ -96,9 +96,8 @@ struct ColorWindowStats {
 };
 
 template <int MaxRadius>
-RTD_HOST_DEVICE RTD_INLINE ColorWindowStats colorWindowStats(const PlaneSet& rowSums,
-                                                             PixelIndex i, PixelIndex pitch,
-                                                             int radius) {
+RTD_HOST_DEVICE RTD_INLINE ColorWindowStats colorWindowStats(const PlaneSet& rowSums, PixelIndex i,
+                                                             PixelIndex pitch, int radius) {
     ColorWindowStats s;
     s.count = maxf(columnSum<MaxRadius>(rowSums, 0, i, pitch, radius), 1.0f);
     float inv = 1.0f / s.count;

@@ -108,9 +108,9 @@ const CpuKernelTable& cpuKernels(CpuIsa isa) {
         throw Error(ErrorCode::DeviceFailure,
                     std::string("--cpu-isa ") + toString(isa) + ": this build has no such kernels");
     if (int(isa) > int(best))
-        throw Error(ErrorCode::DeviceFailure, std::string("--cpu-isa ") + toString(isa) +
-                                                  ": this processor does not support it (best: " +
-                                                  toString(best) + ")");
+        throw Error(ErrorCode::DeviceFailure,
+                    std::string("--cpu-isa ") + toString(isa) +
+                        ": this processor does not support it (best: " + toString(best) + ")");
     return *table;
 }
 
