@@ -210,9 +210,15 @@ struct SvgfVarianceKernel {
         for (int dx = -kRadius; dx <= kRadius; ++dx) {
             PixelIndex j = i + L.offset(dx, dy);
             Float3 cj = illumination.load(j);
+            float along = dzdx * float(dx) + dzdy * float(dy);
+            Float3 nJ = g.normal.load(j);
+            // A scalar (sparse) kernel: a branch on the setting costs nothing here.
             float w = svgfTapMask(terms, id, g.objectId[j]) *
-                      svgfWeight<-1>(terms, zI, g.depth[j], dzdx * float(dx) + dzdy * float(dy), nI,
-                                     g.normal.load(j), lI, luminance(cj), inverseSigmaLuminance);
+                      (terms.sigmaNormal == 128.0f
+                           ? svgfWeight<7>(terms, zI, g.depth[j], along, nI, nJ, lI, luminance(cj),
+                                           inverseSigmaLuminance)
+                           : svgfWeight<-1>(terms, zI, g.depth[j], along, nI, nJ, lI,
+                                            luminance(cj), inverseSigmaLuminance));
             float shifted = moments.at(0, j) - centreMean;
             sum += cj * w;
             m1 += shifted * w;
