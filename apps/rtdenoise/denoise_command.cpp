@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -46,6 +47,25 @@ const std::map<std::string, CpuIsa> kCpuIsas{{"auto", CpuIsa::Auto},
                                              {"sse2", CpuIsa::Sse2},
                                              {"avx2", CpuIsa::Avx2},
                                              {"avx512", CpuIsa::Avx512}};
+
+// An option taking one of `choices` by name (any case). A wrong name fails with the names
+// allowed ("--method: magic not in {atrous, jbf, svgf, temporal}"), not the enum values.
+template <class Enum>
+void addChoice(CLI::App& c, const std::string& name, Enum& target,
+               const std::map<std::string, Enum>& choices, const std::string& help,
+               const std::string& names) {
+    std::vector<std::string> keys;
+    for (const auto& entry : choices) keys.push_back(entry.first);
+    c.add_option_function<std::string>(
+         name,
+         [&target, &choices](std::string value) {
+             for (char& ch : value) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+             target = choices.at(value);
+         },
+         help)
+        ->check(CLI::IsMember(keys, CLI::ignore_case))
+        ->option_text(fmt::format("{} (default {})", names, toString(target)));
+}
 
 double median(std::vector<double> v) {
     if (v.empty()) return 0.0;
@@ -198,20 +218,14 @@ void applyConfigFile(CLI::App& command, const fs::path& file) {
 
 void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     // Named choices: the help shows the names and the default by name, not the enum values.
-    c.add_option("--method", s.method, "Denoising method")
-        ->transform(CLI::CheckedTransformer(kMethods, CLI::ignore_case).description(""))
-        ->option_text(fmt::format("jbf|atrous|temporal|svgf (default {})", toString(s.method)));
-    c.add_option("--spatial-filter", s.temporal.spatialFilter,
-                 "Spatial filter of the temporal method")
-        ->transform(CLI::CheckedTransformer(kFilters, CLI::ignore_case).description(""))
-        ->option_text(fmt::format("jbf|atrous (default {})", toString(s.temporal.spatialFilter)));
-    c.add_option("--device", s.device, "Compute device (auto picks a GPU when there is one)")
-        ->transform(CLI::CheckedTransformer(kDevices, CLI::ignore_case).description(""))
-        ->option_text(fmt::format("cpu|cuda|auto (default {})", toString(s.device)));
-    c.add_option("--cpu-isa", s.cpuIsa,
-                 "Instruction set of the CPU kernels (auto: the widest this processor has)")
-        ->transform(CLI::CheckedTransformer(kCpuIsas, CLI::ignore_case).description(""))
-        ->option_text(fmt::format("auto|scalar|sse2|avx2|avx512 (default {})", toString(s.cpuIsa)));
+    addChoice(c, "--method", s.method, kMethods, "Denoising method", "jbf|atrous|temporal|svgf");
+    addChoice(c, "--spatial-filter", s.temporal.spatialFilter, kFilters,
+              "Spatial filter of the temporal method", "jbf|atrous");
+    addChoice(c, "--device", s.device, kDevices,
+              "Compute device (auto picks a GPU when there is one)", "cpu|cuda|auto");
+    addChoice(c, "--cpu-isa", s.cpuIsa, kCpuIsas,
+              "Instruction set of the CPU kernels (auto: the widest this processor has)",
+              "auto|scalar|sse2|avx2|avx512");
     c.add_option("--sigma-color", s.edges.sigmaColor, "[>0] colour edge-stopping sigma")
         ->capture_default_str();
     c.add_option("--sigma-normal", s.edges.sigmaNormal,
