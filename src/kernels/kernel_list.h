@@ -12,24 +12,24 @@
 #include "kernels/svgf.h"
 #include "kernels/window_sums.h"
 
-#define RTD_FOR_EACH_KERNEL(X)   \
-    X(IngestKernel)              \
-    X(LuminanceRowSumsKernel)    \
+#define RTD_FOR_EACH_KERNEL(X)    \
+    X(IngestKernel)               \
+    X(LuminanceRowSumsKernel)     \
     X(LuminanceRowSumsWideKernel) \
-    X(ColorRowSumsKernel)        \
-    X(ColorRowSumsWideKernel)    \
-    X(OutlierKernel)             \
-    X(OutlierWideKernel)         \
-    X(JbfKernel)                 \
-    X(AtrousKernel)              \
-    X(AtrousNarrowNormalKernel)  \
-    X(GeometryDerivativesKernel) \
-    X(ReprojectKernel)           \
-    X(AccumulateKernel)          \
-    X(AccumulateWideKernel)      \
-    X(SvgfTemporalKernel)        \
-    X(SvgfTemporalSearchKernel)  \
-    X(SvgfVarianceKernel)        \
-    X(SvgfAtrousKernel)          \
-    X(SvgfAtrousNormal128Kernel) \
+    X(ColorRowSumsKernel)         \
+    X(ColorRowSumsWideKernel)     \
+    X(OutlierKernel)              \
+    X(OutlierWideKernel)          \
+    X(JbfKernel)                  \
+    X(AtrousKernel)               \
+    X(AtrousNarrowNormalKernel)   \
+    X(GeometryDerivativesKernel)  \
+    X(ReprojectKernel)            \
+    X(AccumulateKernel)           \
+    X(AccumulateWideKernel)       \
+    X(SvgfTemporalKernel)         \
+    X(SvgfTemporalSearchKernel)   \
+    X(SvgfVarianceKernel)         \
+    X(SvgfAtrousKernel)           \
+    X(SvgfAtrousNormal128Kernel)  \
     X(ModulateKernel)

@@ -217,8 +217,8 @@ struct SvgfVarianceKernel {
                       (terms.sigmaNormal == 128.0f
                            ? svgfWeight<7>(terms, zI, g.depth[j], along, nI, nJ, lI, luminance(cj),
                                            inverseSigmaLuminance)
-                           : svgfWeight<-1>(terms, zI, g.depth[j], along, nI, nJ, lI,
-                                            luminance(cj), inverseSigmaLuminance));
+                           : svgfWeight<-1>(terms, zI, g.depth[j], along, nI, nJ, lI, luminance(cj),
+                                            inverseSigmaLuminance));
             float shifted = moments.at(0, j) - centreMean;
             sum += cj * w;
             m1 += shifted * w;

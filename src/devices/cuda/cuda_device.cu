@@ -23,8 +23,7 @@ __global__ void runKernel2D(Kernel kernel, int width, int height) {
     if (x < width && y < height) kernel(x, y);
 }
 
-__global__ void sumBytesKernel(const std::uint8_t* data, std::size_t n,
-                               unsigned long long* total) {
+__global__ void sumBytesKernel(const std::uint8_t* data, std::size_t n, unsigned long long* total) {
     unsigned long long local = 0;
     for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < n;
          i += std::size_t(gridDim.x) * blockDim.x)
@@ -33,7 +32,7 @@ __global__ void sumBytesKernel(const std::uint8_t* data, std::size_t n,
 }
 
 class CudaDevice final : public Device {
-public:
+  public:
     CudaDevice() {
         check(cudaGetDevice(&device_), "cudaGetDevice");
         cudaDeviceProp properties{};
@@ -88,17 +87,17 @@ public:
         return static_cast<long long>(total);
     }
 
-#define RTD_DEFINE_LAUNCH(K)                                                           \
-    void launch(const K& kernel, int width, int height) override {                     \
-        dim3 block(32, 8);                                                             \
+#define RTD_DEFINE_LAUNCH(K)                                                          \
+    void launch(const K& kernel, int width, int height) override {                    \
+        dim3 block(32, 8);                                                            \
         dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y); \
-        runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);               \
-        check(cudaGetLastError(), #K);                                                 \
+        runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);              \
+        check(cudaGetLastError(), #K);                                                \
     }
     RTD_FOR_EACH_KERNEL(RTD_DEFINE_LAUNCH)
 #undef RTD_DEFINE_LAUNCH
 
-private:
+  private:
     int device_ = 0;
     std::string name_;
     cudaStream_t stream_ = nullptr;
