@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "baseline_jbf.h"
+#include "core/frame_order.h"
 #include "rtdenoise/rtdenoise.h"
 
 namespace {
@@ -29,43 +30,50 @@ const std::vector<Frame>& frames() {
     return loaded;
 }
 
-// 0, 1, ..., n-1, n-2, ..., 1, 0, 1, ...: the frames played forwards then backwards, so every
-// step is between neighbouring frames (cycling 0..n-1 would cut back to frame 0 each time, a
-// disocclusion of the whole moving scene that a real sequence does not have).
-std::size_t pingPong(std::size_t i, std::size_t n) {
-    if (n < 2) return 0;
-    std::size_t period = 2 * (n - 1), k = i % period;
-    return k < n ? k : period - k;
+// A CPU denoiser already run once over the frames, so temporal methods have a full history (the
+// steady state of all but a sequence's first frames); next() feeds it the following frame.
+struct SteadyState {
+    explicit SteadyState(Method method, SpatialFilter filter = SpatialFilter::Atrous)
+        : denoiser([&] {
+              DenoiserSettings settings;
+              settings.method = method;
+              settings.device = DeviceType::Cpu;
+              settings.temporal.spatialFilter = filter;
+              return settings;
+          }()) {
+        for (const Frame& f : frames()) denoiser.processFrame(f, output);
+    }
+    void next() {
+        denoiser.processFrame(frames()[pingPongFrame(index++, frames().size())], output);
+    }
+
+    Denoiser denoiser;
+    Image output;
+    std::size_t index = 0;
+};
+
+bool skipWithoutFrames(benchmark::State& state) {
+    if (!frames().empty()) return false;
+    state.SkipWithError("course data not found beside the repository");
+    return true;
 }
 
 void runMethod(benchmark::State& state, Method method, SpatialFilter filter) {
-    if (frames().empty()) {
-        state.SkipWithError("course data not found beside the repository");
-        return;
-    }
-    DenoiserSettings settings;
-    settings.method = method;
-    settings.device = DeviceType::Cpu;
-    settings.temporal.spatialFilter = filter;
-    Denoiser denoiser(settings);
-    Image output;
-    std::vector<double> passTotals(denoiser.passes().size(), 0.0);
-    // Warm-up: one pass over the frames, so temporal methods run with a full history (steady
-    // state) as they do for all but the first frames of a sequence.
-    for (const Frame& f : frames()) denoiser.processFrame(f, output);
-    std::size_t i = 0;
+    if (skipWithoutFrames(state)) return;
+    SteadyState run(method, filter);
+    std::vector<double> passTotals(run.denoiser.passes().size(), 0.0);
     for (auto _ : state) {
-        denoiser.processFrame(frames()[pingPong(i++, frames().size())], output);
-        benchmark::DoNotOptimize(output.pixels.data());
-        const FrameStats& stats = denoiser.lastFrameStats();
+        run.next();
+        benchmark::DoNotOptimize(run.output.pixels.data());
+        const FrameStats& stats = run.denoiser.lastFrameStats();
         for (std::size_t p = 0; p < passTotals.size(); ++p)
             passTotals[p] += stats.passMilliseconds[p];
     }
     for (std::size_t p = 0; p < passTotals.size(); ++p)
-        state.counters[denoiser.passes()[p].name + "_ms"] =
+        state.counters[run.denoiser.passes()[p].name + "_ms"] =
             passTotals[p] / double(state.iterations());
     state.SetItemsProcessed(state.iterations());
-    state.SetLabel(denoiser.deviceName());
+    state.SetLabel(run.denoiser.deviceName());
 }
 
 void BM_Jbf(benchmark::State& s) {
@@ -86,10 +94,7 @@ void BM_Svgf(benchmark::State& s) {
 
 // state.range(0): threads (1: the course code as written, 2: both cores of this machine).
 void BM_BaselineJbf(benchmark::State& state) {
-    if (frames().empty()) {
-        state.SkipWithError("course data not found beside the repository");
-        return;
-    }
+    if (skipWithoutFrames(state)) return;
     DenoiserSettings settings;
     Image output;
     for (auto _ : state) {
@@ -115,22 +120,13 @@ BENCHMARK(BM_TemporalJbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime
 // denoiser has is in one of them, or in jbf/atrous above), timed alone with the device's pass
 // timestamps (manual time), the frames run in order as above.
 void runPass(benchmark::State& state, Method method, std::size_t pass) {
-    if (frames().empty()) {
-        state.SkipWithError("course data not found beside the repository");
-        return;
-    }
-    DenoiserSettings settings;
-    settings.method = method;
-    settings.device = DeviceType::Cpu;
-    Denoiser denoiser(settings);
-    Image output;
-    for (const Frame& f : frames()) denoiser.processFrame(f, output);
-    std::size_t i = 0;
+    if (skipWithoutFrames(state)) return;
+    SteadyState run(method);
     for (auto _ : state) {
-        denoiser.processFrame(frames()[pingPong(i++, frames().size())], output);
-        state.SetIterationTime(denoiser.lastFrameStats().passMilliseconds[pass] / 1000.0);
+        run.next();
+        state.SetIterationTime(run.denoiser.lastFrameStats().passMilliseconds[pass] / 1000.0);
     }
-    state.SetLabel(denoiser.passes()[pass].name);
+    state.SetLabel(run.denoiser.passes()[pass].name);
 }
 
 void registerPassBenchmarks() {

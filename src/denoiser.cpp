@@ -147,7 +147,6 @@ struct Denoiser::Impl {
     }
     template <class Kernel>
     void launchSvgfTemporal(const DeviceBuffer<float>& in, const SvgfSettings& sv) {
-        constexpr int kClampRadius = 3;  // 7x7, as the variance estimate
         launch(Kernel{gbuffer(),
                       previousGeometry(),
                       objects.data(),
@@ -156,7 +155,7 @@ struct Denoiser::Impl {
                       historyTest(),
                       planes(in),
                       sums(),
-                      kClampRadius,
+                      kSvgfWindowRadius,
                       sv.historyClampK,
                       planeSet(feedback[previous()]),
                       planeSet(moments[previous()]),
@@ -170,6 +169,16 @@ struct Denoiser::Impl {
                       sv.momentsAlpha,
                       float(sv.maxHistory),
                       hasHistory ? 1 : 0});
+    }
+
+    // A window kernel (window_sums.h) in the instantiation that covers `radius`: the 7x7 one
+    // where it suffices, else the widest.
+    template <template <int> class Kernel, class... Fields>
+    void launchWindowed(int radius, const Fields&... fields) {
+        if (radius <= kNarrowWindow)
+            launch(Kernel<kNarrowWindow>{fields...});
+        else
+            launch(Kernel<kWideWindow>{fields...});
     }
 
     // How far a window kernel of this radius reads (its compile-time width, window_sums.h).
@@ -319,21 +328,13 @@ struct Denoiser::Impl {
         int radius = settings.temporal.clampRadius;
         padding = std::max(padding, windowReach(radius));
         addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
-            if (radius <= kNarrowWindow)
-                launch(ColorRowSumsKernel{gbuffer(), planes(filtered), sums(), radius});
-            else
-                launch(ColorRowSumsWideKernel{gbuffer(), planes(filtered), sums(), radius});
+            launchWindowed<ColorRowSums>(radius, gbuffer(), planes(filtered), sums(), radius);
         });
         addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity"},
                 {"output", "history"}, [this, alpha, k, radius] {
-                    if (radius <= kNarrowWindow)
-                        launch(AccumulateKernel{gbuffer(), sums(), planes(filtered),
-                                                planes(reprojected), validity.data(),
-                                                planes(history[current]), alpha, k, radius});
-                    else
-                        launch(AccumulateWideKernel{gbuffer(), sums(), planes(filtered),
-                                                    planes(reprojected), validity.data(),
-                                                    planes(history[current]), alpha, k, radius});
+                    launchWindowed<Accumulate>(radius, gbuffer(), sums(), planes(filtered),
+                                               planes(reprojected), validity.data(),
+                                               planes(history[current]), alpha, k, radius);
                 });
     }
 
@@ -371,26 +372,24 @@ struct Denoiser::Impl {
         const SvgfSettings& sv = settings.svgf;
         SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance,
                         settings.edges.separateObjects ? 1 : 0};
-        constexpr int kVarianceRadius = 3;  // 7x7 spatial estimate
-        padding = std::max({padding, kVarianceRadius, 2 << (sv.iterations - 1)});
+        padding = std::max({padding, kSvgfWindowRadius, 2 << (sv.iterations - 1)});
         addGeometryPass();
         if (sv.historyClampK > 0.0f) {
             addPass("svgf-clamp-rows", {inName, "objectId"}, {"windowSums"}, [this, in] {
-                launch(ColorRowSumsKernel{gbuffer(), planes(*in), sums(), kVarianceRadius});
+                launch(ColorRowSumsKernel{gbuffer(), planes(*in), sums(), kSvgfWindowRadius});
             });
         }
-        addPass("svgf-temporal",
-                {inName, "windowSums", "position", "normal", "depth", "objectId", "derivatives",
-                 "previous geometry", "feedback", "moments", "historyLength", "matrices"},
-                {"illumination", "moments", "historyLength", "validity", "illumination+variance"},
+        std::vector<std::string> temporalInputs = {
+            inName,        "windowSums",        "position", "normal",  "depth",         "objectId",
+            "derivatives", "previous geometry", "feedback", "moments", "historyLength", "matrices"};
+        std::vector<std::string> temporalOutputs = {"illumination", "moments", "historyLength",
+                                                    "validity", "illumination+variance"};
+        addPass("svgf-temporal", temporalInputs, temporalOutputs,
                 [this, in, sv] { launchSvgfTemporal<SvgfTemporalKernel>(*in, sv); });
         // The pixels whose bilinear taps all failed, again with the 3x3 search (few: sparse).
-        addPass(
-            "svgf-temporal-search",
-            {inName, "windowSums", "position", "normal", "depth", "objectId", "derivatives",
-             "previous geometry", "feedback", "moments", "historyLength", "matrices", "validity"},
-            {"illumination", "moments", "historyLength", "validity", "illumination+variance"},
-            [this, in, sv] { launchSvgfTemporal<SvgfTemporalSearchKernel>(*in, sv); });
+        temporalInputs.push_back("validity");
+        addPass("svgf-temporal-search", temporalInputs, temporalOutputs,
+                [this, in, sv] { launchSvgfTemporal<SvgfTemporalSearchKernel>(*in, sv); });
         // Short histories only (sparse): the temporal passes wrote the rest.
         addPass(
             "svgf-variance",
@@ -416,7 +415,7 @@ struct Denoiser::Impl {
                     {slotName(src), "normal", "depth", "derivatives"}, {slotName(dst)},
                     [this, terms, stride, src, dst] {
                         PlaneSet from = planeSet(slot(src)), to = planeSet(slot(dst));
-                        if (terms.sigmaNormal == 128.0f)  // the paper's: no logarithm per tap
+                        if (normalFactorBySquarings(terms))  // no logarithm per tap
                             launch(SvgfAtrousNormal128Kernel{gbuffer(), planeSet(derivatives), from,
                                                              to, stride, terms});
                         else
@@ -440,19 +439,12 @@ struct Denoiser::Impl {
             float k = settings.outlier.k;
             padding = std::max(padding, windowReach(radius));
             addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
-                if (radius <= kNarrowWindow)
-                    launch(LuminanceRowSumsKernel{gbuffer(), planes(noisy), sums(), radius});
-                else
-                    launch(LuminanceRowSumsWideKernel{gbuffer(), planes(noisy), sums(), radius});
+                launchWindowed<LuminanceRowSums>(radius, gbuffer(), planes(noisy), sums(), radius);
             });
             addPass("outlier", {"noisy", "windowSums", "objectId"}, {"despeckled"},
                     [this, radius, k] {
-                        if (radius <= kNarrowWindow)
-                            launch(OutlierKernel{gbuffer(), sums(), planes(noisy),
-                                                 planes(despeckled), radius, k});
-                        else
-                            launch(OutlierWideKernel{gbuffer(), sums(), planes(noisy),
-                                                     planes(despeckled), radius, k});
+                        launchWindowed<Outlier>(radius, gbuffer(), sums(), planes(noisy),
+                                                planes(despeckled), radius, k);
                     });
             in = &despeckled;
             inName = "despeckled";

@@ -5,7 +5,6 @@
 
 #include <cmath>
 
-#include "render/render_sequence.h"
 #include "test_support.h"
 
 namespace rtd {
@@ -23,15 +22,6 @@ std::string cudaUnavailableReason() {
     }
 }
 
-// max |gpu - cpu| / max(|cpu|, 1e-2) over all values.
-double maxRelativeDifference(const Image& cpu, const Image& gpu) {
-    double worst = 0.0;
-    for (std::size_t i = 0; i < cpu.pixels.size(); ++i)
-        worst = std::max(worst, std::abs(double(gpu.pixels[i]) - cpu.pixels[i]) /
-                                    std::max(std::abs(double(cpu.pixels[i])), 1e-2));
-    return worst;
-}
-
 void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what) {
     for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf}) {
         DenoiserSettings s;
@@ -42,7 +32,7 @@ void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what) {
         Denoiser gpu(s);
         for (std::size_t i = 0; i < frames.size(); ++i) {
             Image a = cpu.processFrame(frames[i]), b = gpu.processFrame(frames[i]);
-            double difference = maxRelativeDifference(a, b);
+            double difference = test::maxRelativeDifference(a, b);
             EXPECT_LE(difference, 1e-3) << what << ", " << toString(method) << ", frame " << i;
         }
     }
@@ -51,16 +41,7 @@ void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what) {
 TEST(Gpu, CpuAndCudaAgreeOnARenderedScene) {
     std::string reason = cudaUnavailableReason();
     if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
-    test::TempFolder dir("gpu-scene");
-    render::RenderSettings r;
-    r.width = 96;
-    r.height = 64;
-    r.frames = 4;
-    r.gbufferOnly = true;
-    render::renderSequence("moving-objects", r, dir.path());
-    Sequence sequence(dir.path());
-    std::vector<Frame> frames;
-    for (int i = 0; i < sequence.frameCount(); ++i) frames.push_back(sequence.readFrame(i));
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects");
     expectBackEndsAgree(frames, "moving-objects");
 }
 

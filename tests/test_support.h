@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -12,7 +13,9 @@
 #include <functional>
 #include <random>
 #include <string>
+#include <vector>
 
+#include "render/render_sequence.h"
 #include "rtdenoise/rtdenoise.h"
 
 namespace rtd::test {
@@ -144,6 +147,31 @@ inline std::string quoted(const std::filesystem::path& p) {
 
 inline std::filesystem::path boxFolder() {
     return std::filesystem::path(RTD_SHARED_DIR) / "data" / "box";
+}
+
+// max |b - a| / max(|a|, 1e-2) over all values: the measure of the back-end and
+// instruction-set equivalence tests.
+inline double maxRelativeDifference(const Image& a, const Image& b) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i)
+        worst = std::max(worst, std::abs(double(b.pixels[i]) - a.pixels[i]) /
+                                    std::max(std::abs(double(a.pixels[i])), 1e-2));
+    return worst;
+}
+
+// The frames (G-buffer and 1-spp beauty) of a small rendered sequence: 96x64, 4 frames.
+inline std::vector<Frame> renderSmallSequence(const std::string& scene) {
+    TempFolder dir("small-" + scene);
+    render::RenderSettings r;
+    r.width = 96;
+    r.height = 64;
+    r.frames = 4;
+    r.gbufferOnly = true;
+    render::renderSequence(scene, r, dir.path());
+    Sequence sequence(dir.path());
+    std::vector<Frame> frames;
+    for (int i = 0; i < sequence.frameCount(); ++i) frames.push_back(sequence.readFrame(i));
+    return frames;
 }
 
 }  // namespace rtd::test

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "commands.h"
+#include "core/frame_order.h"
 #include "render/render_sequence.h"
 #include "rtdenoise/rtdenoise.h"
 
@@ -62,15 +63,6 @@ std::pair<int, int> parseSize(const std::string& text) {
         throw Error(ErrorCode::InvalidArgument,
                     fmt::format("--size {}: expected WIDTHxHEIGHT, e.g. 1920x1080", text));
     return {w, h};
-}
-
-// 0, 1, ..., n-1, n-2, ..., 1, 0, 1, ...: the frames played forwards then backwards, so every
-// step is between neighbouring frames (cycling 0..n-1 would cut back to frame 0 each time, a
-// disocclusion of the whole moving scene that a real sequence does not have).
-std::size_t pingPong(std::size_t i, std::size_t n) {
-    if (n < 2) return 0;
-    std::size_t period = 2 * (n - 1), k = i % period;
-    return k < n ? k : period - k;
 }
 
 const std::map<std::string, Method> kBenchMethods{{"jbf", Method::Jbf},
@@ -161,7 +153,8 @@ int runBench(const BenchOptions& o) {
                 t.passes.resize(denoiser.passes().size());
                 for (int i = 0; i < o.frames; ++i) {
                     auto start = std::chrono::steady_clock::now();
-                    denoiser.processFrame(frames[pingPong(std::size_t(i), frames.size())], output);
+                    denoiser.processFrame(frames[pingPongFrame(std::size_t(i), frames.size())],
+                                          output);
                     double total = std::chrono::duration<double, std::milli>(
                                        std::chrono::steady_clock::now() - start)
                                        .count();

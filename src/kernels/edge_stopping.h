@@ -33,19 +33,13 @@ inline bool oppositeNormalsVanish(const EdgeStoppingTerms& t) {
 }
 
 // D_normal^2 = acos(c)^2. OppositeNormalsVanish (see above): c < 0 may then be read as 0, whose
-// (pi/2)^2 weighs nothing too, and on [0, 1] acos(c)^2 = (1 - c) p(c)^2 (acosFast's fit
+// (pi/2)^2 weighs nothing too, and on [0, 1] acos(c)^2 = (1 - c) p(c)^2 (acosFast's fit,
 // squared) needs no square root.
 template <bool OppositeNormalsVanish>
 RTD_HOST_DEVICE RTD_INLINE float normalAngleSquared(float cosine) {
     if constexpr (OppositeNormalsVanish) {
         float c = clampf(cosine, 0.0f, 1.0f);
-        float p = -4.33703996e-3f;
-        p = p * c + 1.93479445e-2f;
-        p = p * c - 4.49569637e-2f;
-        p = p * c + 8.78755555e-2f;
-        p = p * c - 2.14512260e-1f;
-        p = p * c + 1.57079521f;
-        return (1.0f - c) * p * p;
+        return (1.0f - c) * square(acosSqrtFactor(c));
     } else {
         return square(acosFast(cosine));
     }

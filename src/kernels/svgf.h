@@ -53,6 +53,16 @@ RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, float depthI, fl
     }
 }
 
+// The 7x7 windows of SVGF: the short-history variance estimate and the anti-lag statistics.
+constexpr int kSvgfWindowRadius = 3;
+static_assert(kSvgfWindowRadius <= kNarrowWindow, "the window sums' narrow instantiation");
+
+// The paper's (and the default) sigma_n = 128 = 2^7: its normal factor by 7 squarings.
+constexpr int kPaperNormalSquarings = 7;
+RTD_HOST_DEVICE RTD_INLINE bool normalFactorBySquarings(const SvgfTerms& t) {
+    return t.sigmaNormal == 128.0f;
+}
+
 RTD_HOST_DEVICE RTD_INLINE float svgfTapMask(const SvgfTerms& t, std::int32_t centreId,
                                              std::int32_t tapId) {
     bool ok = t.separateObjects ? tapId == centreId : tapId >= 0;
@@ -184,7 +194,7 @@ struct SvgfVarianceKernel {
     PlaneSet out;  // rgb + variance (SvgfTemporal's filterInput), revised in place
     SvgfTerms terms;
     float shortHistory;
-    static constexpr int kRadius = 3;  // 7x7, unrolled
+    static constexpr int kRadius = kSvgfWindowRadius;  // unrolled
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
@@ -213,12 +223,13 @@ struct SvgfVarianceKernel {
             float along = dzdx * float(dx) + dzdy * float(dy);
             Float3 nJ = g.normal.load(j);
             // A scalar (sparse) kernel: a branch on the setting costs nothing here.
-            float w = svgfTapMask(terms, id, g.objectId[j]) *
-                      (terms.sigmaNormal == 128.0f
-                           ? svgfWeight<7>(terms, zI, g.depth[j], along, nI, nJ, lI, luminance(cj),
-                                           inverseSigmaLuminance)
-                           : svgfWeight<-1>(terms, zI, g.depth[j], along, nI, nJ, lI, luminance(cj),
-                                            inverseSigmaLuminance));
+            float w =
+                svgfTapMask(terms, id, g.objectId[j]) *
+                (normalFactorBySquarings(terms)
+                     ? svgfWeight<kPaperNormalSquarings>(terms, zI, g.depth[j], along, nI, nJ, lI,
+                                                         luminance(cj), inverseSigmaLuminance)
+                     : svgfWeight<-1>(terms, zI, g.depth[j], along, nI, nJ, lI, luminance(cj),
+                                      inverseSigmaLuminance));
             float shifted = moments.at(0, j) - centreMean;
             sum += cj * w;
             m1 += shifted * w;
@@ -296,6 +307,6 @@ struct SvgfAtrous {
 };
 using SvgfAtrousKernel = SvgfAtrous<-1>;  // any sigma_n
 // sigma_n = 128 (the paper's and the default): the normal factor by squarings, no logarithm.
-using SvgfAtrousNormal128Kernel = SvgfAtrous<7>;
+using SvgfAtrousNormal128Kernel = SvgfAtrous<kPaperNormalSquarings>;
 
 }  // namespace rtd
