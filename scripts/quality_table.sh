@@ -3,6 +3,8 @@
 # denoises it with every method (defaults), and prints scene x method: relMSE, PSNR, SSIM and
 # temporal error (means over the frames) as a Markdown table.
 #   scripts/quality_table.sh [WIDTH HEIGHT FRAMES REF_SPP]   (default 128 128 8 256)
+# Environment: METHODS (default "input jbf atrous temporal svgf") and EXTRA (options added to
+# every denoise, e.g. EXTRA="--svgf-clamp-k 0" METHODS=svgf for the paper's SVGF).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 width="${1:-128}" height="${2:-128}" frames="${3:-8}" refspp="${4:-256}"
@@ -15,8 +17,8 @@ for scene in moving-objects camera-pan thin-geometry switching-light; do
   "$bin" render "$scene" -o "$work/$scene" --width "$width" --height "$height" \
       --frames "$frames" --ref-spp "$refspp" -q
   # "input": the noisy frames themselves (a 0-radius JBF without firefly removal is the identity)
-  for method in input jbf atrous temporal svgf; do
-    args=(--method "$method")
+  for method in ${METHODS:-input jbf atrous temporal svgf}; do
+    args=(--method "$method" ${EXTRA:-})
     [ "$method" = input ] && args=(--method jbf --radius 0 --no-outlier --no-albedo)
     "$bin" denoise "$work/$scene" -o "$work/$scene-$method" "${args[@]}" -q
     "$bin" compare "$work/$scene-$method" "$work/$scene/reference" \
