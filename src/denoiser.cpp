@@ -43,6 +43,8 @@ void checkImage(const Image& image, int width, int height, int channels, const c
                                 width, height, channels));
 }
 
+// Names the first out-of-range ID (the ingest counts them on the device; this runs on the host
+// only for a frame already known to hold one).
 void checkObjectIds(const std::int32_t* ids, int w, int h, int objectCount) {
     std::size_t n = std::size_t(w) * h;
     for (std::size_t i = 0; i < n; ++i) {
@@ -66,7 +68,7 @@ void checkFrame(const Frame& f) {
         throw Error(
             ErrorCode::InvalidInput,
             fmt::format("frame: objectId has {} values, expected {}x{}", f.objectId.size(), w, h));
-    // Object IDs are checked once, by checkView, for the view made from this frame.
+    // Object IDs are checked on the device, by the ingest (see throwBadObjectId).
 }
 
 }  // namespace
@@ -103,7 +105,7 @@ struct Denoiser::Impl {
     DeviceBuffer<std::int32_t> objectId[2];
     DeviceBuffer<float> derivatives;  // 3 planes: dz/dx, dz/dy, fwidth(n)
     DeviceBuffer<float> windowSums;   // 7 planes: separable window statistics
-    DeviceBuffer<std::uint8_t> nonFinite, validity;
+    DeviceBuffer<std::uint8_t> inputFlags, validity;
     // svgf only
     DeviceBuffer<float> illumination, varianceOut, filterA, filterB;  // 3, 4, 4, 4 planes
     DeviceBuffer<float> moments[2], historyLength[2], feedback[2];    // 2, 1, 4 planes
@@ -234,7 +236,7 @@ struct Denoiser::Impl {
             ids = DeviceBuffer<std::int32_t>(d, padded);
             d.fill(ids.data(), 0xff, ids.bytes());
         }
-        nonFinite = DeviceBuffer<std::uint8_t>(d, n);
+        inputFlags = DeviceBuffer<std::uint8_t>(d, n);
         validity = DeviceBuffer<std::uint8_t>(d, padded);
         d.fill(validity.data(), kReprojectionNoHistory, validity.bytes());
         if (settings.method == Method::Svgf) {
@@ -485,10 +487,11 @@ struct Denoiser::Impl {
         auto floats = [](const InputBuffer& b) { return static_cast<const float*>(b.device); };
         launch(IngestKernel{layout, floats(inBeauty), floats(inNormal), floats(inPosition),
                             floats(inDepth), static_cast<const std::int32_t*>(inId.device),
+                            objectCount,
                             frameHasAlbedo ? floats(inAlbedo) : nullptr, settings.albedo.epsilon,
                             planes(noisy), planes(albedo), planes(normal[current]),
                             planes(position), depth[current].data(), objectId[current].data(),
-                            nonFinite.data()});
+                            inputFlags.data()});
     }
 
     // One matrix per object: current world -> object -> previous world (-> previous screen).
@@ -559,6 +562,7 @@ struct Denoiser::Impl {
 
         auto start = Clock::now();
         bindInputs(f);
+        objectCount = f.objectCount;
         if (temporal) uploadObjectMatrices(f);
         stats.uploadMilliseconds = millisecondsSince(start);
 
@@ -574,7 +578,12 @@ struct Denoiser::Impl {
         device->synchronize();
         for (std::size_t p = 0; p < pipeline.size(); ++p)
             stats.passMilliseconds[p] = device->millisecondsBetween(int(p), int(p) + 1);
-        stats.nonFiniteReplaced = device->sumBytes(nonFinite.data(), pixels());
+        stats.deviceMilliseconds = device->millisecondsBetween(0, int(pipeline.size()));
+        Device::InputFlagCounts flags = device->countInputFlags(inputFlags.data(), pixels());
+        stats.nonFiniteReplaced = flags.nonFinite;
+        // Bad IDs were read as background; the frame is refused (before it becomes history),
+        // naming the first such pixel.
+        if (flags.badObjectIds > 0) throwBadObjectId(f);
 
         start = Clock::now();
         if (!direct)
@@ -600,8 +609,13 @@ struct Denoiser::Impl {
             throw Error(ErrorCode::InvalidArgument,
                         "frame: device memory needs a Denoiser on a GPU device (" + device->name() +
                             " reads host memory)");
-        if (f.space == MemorySpace::Host)
-            checkObjectIds(f.objectId, f.width, f.height, f.objectCount);
+    }
+
+    [[noreturn]] void throwBadObjectId(const FrameView& f) {
+        std::vector<std::int32_t> ids(pixels());
+        device->copyToHost(ids.data(), inId.device, ids.size() * sizeof(std::int32_t));
+        checkObjectIds(ids.data(), f.width, f.height, f.objectCount);
+        throw Error(ErrorCode::InvalidInput, "frame: an object ID is outside -1..objectCount-1");
     }
 
     // One value per pixel of a padded device plane, on the host.

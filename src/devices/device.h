@@ -25,8 +25,13 @@ class Device {
     // Sets `bytes` bytes of device memory to `value` (like memset).
     virtual void fill(void* deviceDst, int value, std::size_t bytes) = 0;
     virtual void synchronize() = 0;
-    // Sum of n bytes in device memory (counting flagged pixels).
-    virtual long long sumBytes(const std::uint8_t* deviceData, std::size_t n) = 0;
+    // The ingest's per-pixel input flags (IngestKernel::inputFlags) summed: values replaced
+    // (bits 0-1) and pixels with a bad object ID (bit 2).
+    struct InputFlagCounts {
+        long long nonFinite = 0;
+        long long badObjectIds = 0;
+    };
+    virtual InputFlagCounts countInputFlags(const std::uint8_t* deviceFlags, std::size_t n) = 0;
 
 #define RTD_DECLARE_LAUNCH(K) virtual void launch(const K& kernel, int width, int height) = 0;
     RTD_FOR_EACH_KERNEL(RTD_DECLARE_LAUNCH)

@@ -1,5 +1,7 @@
 // Frame ingest: the renderer's interleaved RGB buffers into the denoiser's padded planar ones;
-// NaN/Inf in the radiance become 0 and are flagged so the host can count them. With an albedo,
+// NaN/Inf in the radiance become 0 and object IDs outside -1..objectCount-1 become background
+// (-1), both flagged so the host can count them: the check runs on the device, in parallel, and
+// no kernel ever indexes the object matrices with a bad ID (device-memory inputs included). With an albedo,
 // object pixels are demodulated here (illumination = colour / max(albedo, epsilon)); the
 // ModulateKernel multiplies the same factor back at the end.
 #pragma once
@@ -15,12 +17,15 @@ struct IngestKernel {
     const float* positionRgb;  // interleaved
     const float* depthIn;      // 1 float per pixel
     const std::int32_t* idIn;  // 1 int per pixel
+    int objectCount;           // valid IDs: -1 (background) .. objectCount - 1
     const float* albedoRgb;    // interleaved, or null: albedo 1 (no demodulation)
     float albedoEpsilon;
     Planes3 beauty, albedo, normal, position;
     float* depth;
     std::int32_t* objectId;
-    std::uint8_t* nonFiniteCount;  // per pixel (unpadded): radiance values replaced by 0
+    // Per pixel (unpadded): bits 0-1 the radiance values replaced by 0, kBadObjectIdFlag.
+    std::uint8_t* inputFlags;
+    static constexpr int kBadObjectIdFlag = 4;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex s = PixelIndex(y) * layout.width + x;
@@ -38,7 +43,9 @@ struct IngestKernel {
         // vectorising the kernel. Without an albedo, the beauty is read in its place (unused).
         const float* albedoIn = albedoRgb ? albedoRgb : beautyRgb;
         float r = albedoIn[3 * s], gr = albedoIn[3 * s + 1], b = albedoIn[3 * s + 2];
-        bool use = albedoRgb && idIn[s] >= 0 && isFinite(r) && isFinite(gr) && isFinite(b);
+        std::int32_t id = idIn[s];
+        bool idValid = id >= -1 && id < objectCount;
+        bool use = albedoRgb && idValid && id >= 0 && isFinite(r) && isFinite(gr) && isFinite(b);
         Float3 a;
         a.x = use ? maxf(r, albedoEpsilon) : 1.0f;
         a.y = use ? maxf(gr, albedoEpsilon) : 1.0f;
@@ -49,8 +56,8 @@ struct IngestKernel {
         position.store(i,
                        make3(positionRgb[3 * s], positionRgb[3 * s + 1], positionRgb[3 * s + 2]));
         depth[i] = depthIn[s];
-        objectId[i] = idIn[s];
-        nonFiniteCount[s] = std::uint8_t(bad);
+        objectId[i] = idValid ? id : -1;
+        inputFlags[s] = std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag));
     }
 };
 

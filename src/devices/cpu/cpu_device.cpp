@@ -57,11 +57,14 @@ class CpuDevice final : public Device {
     double millisecondsBetween(int first, int second) override {
         return std::chrono::duration<double, std::milli>(stamps_[second] - stamps_[first]).count();
     }
-    long long sumBytes(const std::uint8_t* data, std::size_t n) override {
-        long long total = 0;
-#pragma omp parallel for reduction(+ : total) schedule(static)
-        for (std::size_t i = 0; i < n; ++i) total += data[i];
-        return total;
+    InputFlagCounts countInputFlags(const std::uint8_t* flags, std::size_t n) override {
+        long long nonFinite = 0, badIds = 0;
+#pragma omp parallel for reduction(+ : nonFinite, badIds) schedule(static)
+        for (std::size_t i = 0; i < n; ++i) {
+            nonFinite += flags[i] & 3;
+            badIds += flags[i] >> 2;
+        }
+        return {nonFinite, badIds};
     }
 
 #define RTD_DEFINE_LAUNCH(K)                                       \

@@ -23,12 +23,17 @@ __global__ void runKernel2D(Kernel kernel, int width, int height) {
     if (x < width && y < height) kernel(x, y);
 }
 
-__global__ void sumBytesKernel(const std::uint8_t* data, std::size_t n, unsigned long long* total) {
-    unsigned long long local = 0;
+// totals[0]: values replaced (flag bits 0-1); totals[1]: pixels with a bad ID (bit 2).
+__global__ void countInputFlagsKernel(const std::uint8_t* flags, std::size_t n,
+                                      unsigned long long* totals) {
+    unsigned long long nonFinite = 0, badIds = 0;
     for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < n;
-         i += std::size_t(gridDim.x) * blockDim.x)
-        local += data[i];
-    if (local) atomicAdd(total, local);
+         i += std::size_t(gridDim.x) * blockDim.x) {
+        nonFinite += flags[i] & 3;
+        badIds += flags[i] >> 2;
+    }
+    if (nonFinite) atomicAdd(&totals[0], nonFinite);
+    if (badIds) atomicAdd(&totals[1], badIds);
 }
 
 class CudaDevice final : public Device {
@@ -39,12 +44,12 @@ class CudaDevice final : public Device {
         check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
         name_ = std::string("cuda (") + properties.name + ")";
         check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
-        check(cudaMalloc(&counter_, sizeof(unsigned long long)), "cudaMalloc");
+        check(cudaMalloc(&counters_, 2 * sizeof(unsigned long long)), "cudaMalloc");
         for (cudaEvent_t& e : events_) check(cudaEventCreate(&e), "cudaEventCreate");
     }
     ~CudaDevice() override {
         for (cudaEvent_t e : events_) cudaEventDestroy(e);
-        cudaFree(counter_);
+        cudaFree(counters_);
         cudaStreamDestroy(stream_);
     }
 
@@ -78,13 +83,13 @@ class CudaDevice final : public Device {
         check(cudaEventElapsedTime(&ms, events_[first], events_[second]), "cudaEventElapsedTime");
         return ms;
     }
-    long long sumBytes(const std::uint8_t* data, std::size_t n) override {
-        check(cudaMemsetAsync(counter_, 0, sizeof(unsigned long long), stream_), "memset");
-        sumBytesKernel<<<256, 256, 0, stream_>>>(data, n, counter_);
-        check(cudaGetLastError(), "sumBytes");
-        unsigned long long total = 0;
-        copyToHost(&total, counter_, sizeof total);
-        return static_cast<long long>(total);
+    InputFlagCounts countInputFlags(const std::uint8_t* flags, std::size_t n) override {
+        check(cudaMemsetAsync(counters_, 0, 2 * sizeof(unsigned long long), stream_), "memset");
+        countInputFlagsKernel<<<256, 256, 0, stream_>>>(flags, n, counters_);
+        check(cudaGetLastError(), "countInputFlags");
+        unsigned long long totals[2] = {};
+        copyToHost(totals, counters_, sizeof totals);
+        return {static_cast<long long>(totals[0]), static_cast<long long>(totals[1])};
     }
 
 #define RTD_DEFINE_LAUNCH(K)                                                          \
@@ -101,7 +106,7 @@ class CudaDevice final : public Device {
     int device_ = 0;
     std::string name_;
     cudaStream_t stream_ = nullptr;
-    unsigned long long* counter_ = nullptr;
+    unsigned long long* counters_ = nullptr;
     cudaEvent_t events_[kTimestampSlots] = {};
 };
 
