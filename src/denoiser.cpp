@@ -276,8 +276,12 @@ struct Denoiser::Impl {
             int radius = settings.jbf.radius;
             addPass("jbf", {inName, "normal", "position", "objectId"}, {"filtered"},
                     [this, in, coordScale, radius, edges] {
-                        launch(JbfKernel{gbuffer(), planes(*in), planes(filtered), radius,
-                                         coordScale, edges});
+                        if (oppositeNormalsVanish(edges))  // no square root per tap
+                            launch(JbfNarrowNormalKernel{gbuffer(), planes(*in), planes(filtered),
+                                                         radius, coordScale, edges});
+                        else
+                            launch(JbfKernel{gbuffer(), planes(*in), planes(filtered), radius,
+                                             coordScale, edges});
                     });
             return;
         }

@@ -29,12 +29,16 @@ using PixelIndex = long;
 #define RTD_UNROLL _Pragma("GCC unroll 16")
 #endif
 
-// On a vectorised inner loop with a short run-time trip count (the JBF's 2r+1 = 33 taps): at
+// On a vectorised inner loop with a short run-time trip count (the JBF's 2r+1 = 33 taps). CPU: at
 // most two vectors per iteration with AVX-512. Clang otherwise interleaves four 16-wide vectors
 // (64 taps) per iteration, and a 33-tap row runs entirely in the scalar remainder (5x slower);
 // with AVX2 its default (4 x 8 = 32 taps) is the better fit.
 #if defined(__clang__) && defined(__AVX512F__) && !defined(__CUDACC__)
 #define RTD_SHORT_VECTOR_LOOP _Pragma("clang loop interleave_count(2)")
+#elif defined(__CUDACC__)
+// On the GPU, unrolled by 4: the taps' loads then share addresses with immediate offsets
+// (the JBF at 1080p on an H100: 5.8 -> 4.5 ms).
+#define RTD_SHORT_VECTOR_LOOP _Pragma("unroll 4")
 #else
 #define RTD_SHORT_VECTOR_LOOP
 #endif

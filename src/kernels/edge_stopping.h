@@ -57,7 +57,7 @@ RTD_HOST_DEVICE RTD_INLINE float edgeStoppingExponent(const EdgeStoppingTerms& t
     Float3 dp = positionJ - positionI;
     // D_plane^2 = (n_i . dp)^2 / |dp|^2: no square root needed.
     float alongNormal = dot(normalI, dp);
-    float dPlane2 = alongNormal * alongNormal / maxf(dot(dp, dp), 1e-20f);
+    float dPlane2 = divideApprox(alongNormal * alongNormal, maxf(dot(dp, dp), 1e-20f));
     return dot(dc, dc) * t.colorScale + dNormal2 * t.normalScale + dPlane2 * t.planeScale;
 }
 

@@ -21,6 +21,7 @@
     X(OutlierKernel)              \
     X(OutlierWideKernel)          \
     X(JbfKernel)                  \
+    X(JbfNarrowNormalKernel)      \
     X(AtrousKernel)               \
     X(AtrousNarrowNormalKernel)   \
     X(GeometryDerivativesKernel)  \

@@ -37,7 +37,7 @@ RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, float depthI, fl
                                             float lumI, float lumJ, float inversePhiLuminance) {
     float dz = depthI - depthJ;
     float slope = depthAlongOffset < 0 ? -depthAlongOffset : depthAlongOffset;
-    float wz = (dz < 0 ? -dz : dz) / (t.sigmaDepth * slope + 1e-3f);
+    float wz = divideApprox(dz < 0 ? -dz : dz, t.sigmaDepth * slope + 1e-3f);
     float dl = lumI - lumJ;
     float wl = (dl < 0 ? -dl : dl) * inversePhiLuminance;
     float cosine = dot(normalI, normalJ);
