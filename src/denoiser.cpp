@@ -491,11 +491,10 @@ struct Denoiser::Impl {
         auto floats = [](const InputBuffer& b) { return static_cast<const float*>(b.device); };
         launch(IngestKernel{layout, floats(inBeauty), floats(inNormal), floats(inPosition),
                             floats(inDepth), static_cast<const std::int32_t*>(inId.device),
-                            objectCount,
-                            frameHasAlbedo ? floats(inAlbedo) : nullptr, settings.albedo.epsilon,
-                            planes(noisy), planes(albedo), planes(normal[current]),
-                            planes(position), depth[current].data(), objectId[current].data(),
-                            inputFlags.data()});
+                            objectCount, frameHasAlbedo ? floats(inAlbedo) : nullptr,
+                            settings.albedo.epsilon, planes(noisy), planes(albedo),
+                            planes(normal[current]), planes(position), depth[current].data(),
+                            objectId[current].data(), inputFlags.data()});
     }
 
     // One matrix per object: current world -> object -> previous world (-> previous screen).

@@ -176,11 +176,12 @@ int runBench(const BenchOptions& o) {
                 // Device memory held per pixel: history, G-buffer copies, intermediates.
                 double bytesPerPixel = double(denoiser.deviceMemoryBytes()) / (megapixels * 1e6);
                 fmt::print(
-                    "{:<9} {:<10} {:>10.2f} {:>10.2f} {:>10.3f} {:>9.2f} {:>9.2f} {:>10.1f} {:>8.0f} "
+                    "{:<9} {:<10} {:>10.2f} {:>10.2f} {:>10.3f} {:>9.2f} {:>9.2f} {:>10.1f} "
+                    "{:>8.0f} "
                     "{:>9}\n",
                     methodName, deviceName, med, minimum(t.frame), median(t.device),
-                    median(t.upload),
-                    median(t.download), megapixels / (med / 1000.0), bytesPerPixel, speedUp);
+                    median(t.upload), median(t.download), megapixels / (med / 1000.0),
+                    bytesPerPixel, speedUp);
                 std::string passes;
                 for (std::size_t p = 0; p < t.passes.size(); ++p) {
                     fmt::print("    {:<16} {:8.3f} ms\n", denoiser.passes()[p].name,
@@ -191,13 +192,14 @@ int runBench(const BenchOptions& o) {
                 json += fmt::format(
                     "{}\n  {{\"method\": \"{}\", \"device\": \"{}\", \"device_name\": \"{}\", "
                     "\"width\": {}, \"height\": {}, \"frames\": {}, \"median_ms\": {:.4f}, "
-                    "\"min_ms\": {:.4f}, \"device_ms\": {:.4f}, \"upload_ms\": {:.4f}, \"download_ms\": {:.4f}, "
+                    "\"min_ms\": {:.4f}, \"device_ms\": {:.4f}, \"upload_ms\": {:.4f}, "
+                    "\"download_ms\": {:.4f}, "
                     "\"read_ms\": {:.4f}, \"mpix_per_s\": {:.2f}, \"device_bytes\": {}, "
                     "\"passes_ms\": {{{}}}}}",
                     firstCase ? "" : ",", methodName, deviceName, denoiser.deviceName(), width,
                     height, o.frames, med, minimum(t.frame), median(t.device), median(t.upload),
-                    median(t.download),
-                    readMs, megapixels / (med / 1000.0), denoiser.deviceMemoryBytes(), passes);
+                    median(t.download), readMs, megapixels / (med / 1000.0),
+                    denoiser.deviceMemoryBytes(), passes);
                 firstCase = false;
             }
         }

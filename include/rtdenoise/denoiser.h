@@ -24,9 +24,9 @@ struct FrameStats {
     // The whole pipeline on the device, from the first pass's start to the last one's end: what
     // the denoiser adds to a frame whose work is queued on the GPU (no host waits or launches).
     double deviceMilliseconds = 0.0;
-    double uploadMilliseconds = 0.0;       // host -> device (including format conversion)
-    double downloadMilliseconds = 0.0;     // device -> host
-    long long nonFiniteReplaced = 0;       // NaN/Inf values in the beauty set to 0
+    double uploadMilliseconds = 0.0;    // host -> device (including format conversion)
+    double downloadMilliseconds = 0.0;  // device -> host
+    long long nonFiniteReplaced = 0;    // NaN/Inf values in the beauty set to 0
 };
 
 // Debug images (Denoiser::debugImage).

@@ -1,8 +1,8 @@
 // Frame ingest: the renderer's interleaved RGB buffers into the denoiser's padded planar ones;
 // NaN/Inf in the radiance become 0 and object IDs outside -1..objectCount-1 become background
 // (-1), both flagged so the host can count them: the check runs on the device, in parallel, and
-// no kernel ever indexes the object matrices with a bad ID (device-memory inputs included). With an albedo,
-// object pixels are demodulated here (illumination = colour / max(albedo, epsilon)); the
+// no kernel ever indexes the object matrices with a bad ID (device-memory inputs included). With an
+// albedo, object pixels are demodulated here (illumination = colour / max(albedo, epsilon)); the
 // ModulateKernel multiplies the same factor back at the end.
 #pragma once
 

@@ -37,8 +37,8 @@ struct Jbf {
                 PixelIndex j = row + dx;
                 Float3 cj = in.load(j);
                 float exponent = (float(dx * dx) + dy2) * coordScale +
-                                 edgeStoppingExponent<OppositeNormalsVanish>(edges, ci, cj, ni, g.normal.load(j), pi,
-                                                      g.position.load(j));
+                                 edgeStoppingExponent<OppositeNormalsVanish>(
+                                     edges, ci, cj, ni, g.normal.load(j), pi, g.position.load(j));
                 float w = tapMask(edges, idI, g.objectId[j]) * expNegative(-exponent);
                 sumR += w * cj.x;
                 sumG += w * cj.y;

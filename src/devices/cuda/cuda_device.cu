@@ -102,7 +102,7 @@ class CudaDevice final : public Device {
 
 #define RTD_DEFINE_LAUNCH(K)                                                          \
     void launch(const K& kernel, int width, int height) override {                    \
-        dim3 block(kBlockX, kBlockY);                                                            \
+        dim3 block(kBlockX, kBlockY);                                                 \
         dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y); \
         runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);              \
         check(cudaGetLastError(), #K);                                                \
