@@ -4,6 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+
+#if RTD_TEST_CUDA
+#include <cuda_runtime.h>
+#endif
 
 #include "test_support.h"
 
@@ -55,6 +60,66 @@ TEST(Gpu, CpuAndCudaAgreeOnTheCourseScene) {
     for (int i = 0; i < 3; ++i) frames.push_back(sequence.readFrame(i));
     expectBackEndsAgree(frames, "box");
 }
+
+#if RTD_TEST_CUDA
+// A renderer's G-buffer already on the GPU: device pointers in, a device pointer out. Gives what
+// the host path gives, and a bad object ID there is refused too (it is checked on the device).
+TEST(Gpu, DevicePointersGiveTheHostPathsResult) {
+    std::string reason = cudaUnavailableReason();
+    if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects");
+    std::vector<void*> allocations;
+    auto toDevice = [&](const void* host, std::size_t bytes) {
+        void* p = nullptr;
+        EXPECT_EQ(cudaMalloc(&p, bytes), cudaSuccess);
+        EXPECT_EQ(cudaMemcpy(p, host, bytes, cudaMemcpyHostToDevice), cudaSuccess);
+        allocations.push_back(p);
+        return p;
+    };
+    DenoiserSettings s;
+    s.method = Method::Svgf;
+    s.device = DeviceType::Cuda;
+    Denoiser fromHost(s), fromDevice(s);
+    const int w = frames[0].width(), h = frames[0].height();
+    const std::size_t n = std::size_t(w) * h;
+    float* output = static_cast<float*>(toDevice(frames[0].beauty.pixels.data(), 3 * n * 4));
+    for (const Frame& f : frames) {
+        FrameView v = viewOf(f);
+        v.space = MemorySpace::Device;
+        v.beauty = static_cast<const float*>(toDevice(v.beauty, 3 * n * 4));
+        v.normal = static_cast<const float*>(toDevice(v.normal, 3 * n * 4));
+        v.position = static_cast<const float*>(toDevice(v.position, 3 * n * 4));
+        v.depth = static_cast<const float*>(toDevice(v.depth, n * 4));
+        v.objectId = static_cast<const std::int32_t*>(toDevice(v.objectId, n * 4));
+        if (v.albedo) v.albedo = static_cast<const float*>(toDevice(v.albedo, 3 * n * 4));
+        fromDevice.processFrame(v, output);
+        Image expected = fromHost.processFrame(f), got(w, h, 3);
+        ASSERT_EQ(cudaMemcpy(got.pixels.data(), output, 3 * n * 4, cudaMemcpyDeviceToHost),
+                  cudaSuccess);
+        EXPECT_LE(test::maxRelativeDifference(expected, got), 1e-6);
+    }
+    // An ID one past the frame's objects: refused, naming the pixel.
+    Frame bad = frames.back();
+    const int badId = int(bad.objectToWorld.size());
+    bad.objectId[5 * w + 3] = badId;
+    FrameView v = viewOf(bad);
+    v.space = MemorySpace::Device;
+    v.beauty = static_cast<const float*>(toDevice(v.beauty, 3 * n * 4));
+    v.normal = static_cast<const float*>(toDevice(v.normal, 3 * n * 4));
+    v.position = static_cast<const float*>(toDevice(v.position, 3 * n * 4));
+    v.depth = static_cast<const float*>(toDevice(v.depth, n * 4));
+    v.objectId = static_cast<const std::int32_t*>(toDevice(v.objectId, n * 4));
+    v.albedo = nullptr;
+    try {
+        fromDevice.processFrame(v, output);
+        ADD_FAILURE() << "a bad object ID in device memory was accepted";
+    } catch (const Error& e) {
+        std::string expected = "object ID " + std::to_string(badId) + " at pixel (3, 5)";
+        EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+    for (void* p : allocations) cudaFree(p);
+}
+#endif
 
 }  // namespace
 }  // namespace rtd

@@ -74,7 +74,7 @@ struct FrameView {
     const float* normal = nullptr;
     const float* position = nullptr;
     const float* depth = nullptr;
-    const std::int32_t* objectId = nullptr;  // -1 or 0..objectCount-1 (not checked on a device)
+    const std::int32_t* objectId = nullptr;  // -1 or 0..objectCount-1 (checked on the device)
     const float* albedo = nullptr;           // optional
     const Matrix4* objectToWorld = nullptr;  // objectCount matrices
     int objectCount = 0;
