@@ -1,6 +1,8 @@
 // Google Benchmark: ms per frame of each method on the course scene (box, 512x512, beside the
 // repository), with each pass's mean time as a counter; a case per kernel (BM_Pass/...); and the
-// straightforward JBF as the baseline. Disk I/O is outside the timing.
+// straightforward JBF as the baseline. Disk I/O is outside the timing. Where a CUDA GPU is
+// present, BM_Cuda/<method> and BM_Pass/cuda/<method>/<pass> time the same on it (device time
+// from the pass timestamps).
 //   build/release/bench/bench_methods --benchmark_min_time=2
 #include <benchmark/benchmark.h>
 
@@ -33,11 +35,12 @@ const std::vector<Frame>& frames() {
 // A CPU denoiser already run once over the frames, so temporal methods have a full history (the
 // steady state of all but a sequence's first frames); next() feeds it the following frame.
 struct SteadyState {
-    explicit SteadyState(Method method, SpatialFilter filter = SpatialFilter::Atrous)
+    explicit SteadyState(Method method, SpatialFilter filter = SpatialFilter::Atrous,
+                         DeviceType device = DeviceType::Cpu)
         : denoiser([&] {
               DenoiserSettings settings;
               settings.method = method;
-              settings.device = DeviceType::Cpu;
+              settings.device = device;
               settings.temporal.spatialFilter = filter;
               return settings;
           }()) {
@@ -119,9 +122,10 @@ BENCHMARK(BM_TemporalJbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime
 // One case per kernel: each pass of the svgf and temporal pipelines (every kernel the
 // denoiser has is in one of them, or in jbf/atrous above), timed alone with the device's pass
 // timestamps (manual time), the frames run in order as above.
-void runPass(benchmark::State& state, Method method, std::size_t pass) {
+void runPass(benchmark::State& state, Method method, std::size_t pass,
+             DeviceType device = DeviceType::Cpu) {
     if (skipWithoutFrames(state)) return;
-    SteadyState run(method);
+    SteadyState run(method, SpatialFilter::Atrous, device);
     for (auto _ : state) {
         run.next();
         state.SetIterationTime(run.denoiser.lastFrameStats().passMilliseconds[pass] / 1000.0);
@@ -149,10 +153,55 @@ void registerPassBenchmarks() {
     }
 }
 
+// The GPU's cases, registered only where a CUDA denoiser can be made.
+void registerCudaBenchmarks() {
+    DenoiserSettings settings;
+    settings.device = DeviceType::Cuda;
+    try {
+        Denoiser probe(settings);
+    } catch (const Error&) {
+        return;
+    }
+    for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf}) {
+        SpatialFilter filter = method == Method::Jbf ? SpatialFilter::Jbf : SpatialFilter::Atrous;
+        std::string name = std::string("BM_Cuda/") + toString(method);
+        // Manual time: the pipeline on the GPU (FrameStats::deviceMilliseconds).
+        benchmark::RegisterBenchmark(
+            name.c_str(),
+            [method, filter](benchmark::State& state) {
+                if (skipWithoutFrames(state)) return;
+                SteadyState run(method, filter, DeviceType::Cuda);
+                for (auto _ : state) {
+                    run.next();
+                    state.SetIterationTime(run.denoiser.lastFrameStats().deviceMilliseconds /
+                                           1000.0);
+                }
+                state.SetLabel(run.denoiser.deviceName());
+            })
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime()
+            ->Iterations(200);
+        if (method != Method::Svgf) continue;
+        settings.method = method;
+        Denoiser probe(settings);
+        for (std::size_t p = 0; p < probe.passes().size(); ++p) {
+            std::string passName = "BM_Pass/cuda/svgf/" + probe.passes()[p].name;
+            benchmark::RegisterBenchmark(passName.c_str(),
+                                         [method, p](benchmark::State& state) {
+                                             runPass(state, method, p, DeviceType::Cuda);
+                                         })
+                ->Unit(benchmark::kMillisecond)
+                ->UseManualTime()
+                ->Iterations(200);
+        }
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     registerPassBenchmarks();
+    registerCudaBenchmarks();
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
     benchmark::RunSpecifiedBenchmarks();
