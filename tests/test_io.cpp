@@ -222,6 +222,23 @@ TEST(Exr, RoundTripIsExact) {
     EXPECT_EQ(dir.names(), (std::vector<std::string>{"gray.exr", "rgb.exr"}));
 }
 
+TEST(Exr, ThreadedCompressionGivesTheSameFile) {
+    // Many ZIP blocks (16 rows each), so OpenEXR's threads really share the work.
+    TempDir dir;
+    Image rgb = patternImage(64, 100, 3, -1.0f);
+    rtd::writeExr(dir / "serial.exr", rgb);
+    rtd::setExrThreads(3);
+    rtd::writeExr(dir / "threaded.exr", rgb);
+    const Image back = rtd::readExr(dir / "threaded.exr", kRgb);
+    rtd::setExrThreads(0);
+    EXPECT_EQ(back.pixels, rgb.pixels);
+    auto bytes = [](const std::filesystem::path& f) {
+        std::ifstream in(f, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_EQ(bytes(dir / "threaded.exr"), bytes(dir / "serial.exr"));
+}
+
 TEST(Exr, ReadsHalfChannelsWithOffsetDataWindow) {
     TempDir dir;
     const auto value = [](int c, int i) { return 0.1f * float(i) + 10.0f * float(c); };

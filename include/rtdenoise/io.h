@@ -67,6 +67,9 @@ void writeFrame(const std::filesystem::path& folder, int index, const Frame& fra
 
 // Linear float EXR (ZIP compression): R,G,B for 3 channels, Y for 1.
 void writeExr(const std::filesystem::path& file, const Image& image);
+// Threads OpenEXR uses to decompress and compress one file's blocks (0, its default: the
+// calling thread alone). Process-wide, as OpenEXR's own setting is; the CLI sets the core count.
+void setExrThreads(int count);
 // 8-bit RGB PNG of an already display-encoded image (values in [0,1], 3 channels).
 void writePng(const std::filesystem::path& file, const Image& image);
 

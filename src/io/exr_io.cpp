@@ -5,6 +5,7 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfThreading.h>
 
 #include <cstddef>
 #include <exception>
@@ -42,6 +43,10 @@ std::string channelNames(const Imf::ChannelList& channels) {
 
 }  // namespace
 
+void setExrThreads(int count) {
+    Imf::setGlobalThreadCount(count < 0 ? 0 : count);
+}
+
 Image readExr(const std::filesystem::path& file,
               const std::vector<std::vector<std::string>>& channelChoices) {
     if (channelChoices.empty()) {
@@ -52,7 +57,7 @@ Image readExr(const std::filesystem::path& file,
         throw Error(ErrorCode::MissingFile, file.string() + ": no such file");
     }
     try {
-        Imf::InputFile input(file.c_str());
+        Imf::InputFile input(file.c_str(), Imf::globalThreadCount());
         const Imf::Header& header = input.header();
         const Imf::ChannelList& channels = header.channels();
 
@@ -158,7 +163,7 @@ void writeExr(const std::filesystem::path& file, const Image& image) {
                                                     xStride, yStride));
         }
         {
-            Imf::OutputFile output(temporary.path().c_str(), header);
+            Imf::OutputFile output(temporary.path().c_str(), header, Imf::globalThreadCount());
             output.setFrameBuffer(frameBuffer);
             output.writePixels(image.height);
         }  // the destructor finishes the file before the rename
