@@ -50,6 +50,25 @@ TEST(Gpu, CpuAndCudaAgreeOnARenderedScene) {
     expectBackEndsAgree(frames, "moving-objects");
 }
 
+// 1400x1000: each RGB input is 16.8 MB, over two of the pinned chunks that copies in and out
+// of host memory go through.
+TEST(Gpu, CpuAndCudaAgreeOnFramesLargerThanTheStagingChunks) {
+    std::string reason = cudaUnavailableReason();
+    if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 1400, 1000, 2);
+    for (Method method : {Method::Atrous, Method::Svgf}) {
+        DenoiserSettings s;
+        s.method = method;
+        s.device = DeviceType::Cpu;
+        Denoiser cpu(s);
+        s.device = DeviceType::Cuda;
+        Denoiser gpu(s);
+        for (const Frame& f : frames)
+            EXPECT_LE(test::maxRelativeDifference(cpu.processFrame(f), gpu.processFrame(f)), 1e-3)
+                << toString(method);
+    }
+}
+
 TEST(Gpu, CpuAndCudaAgreeOnTheCourseScene) {
     std::string reason = cudaUnavailableReason();
     if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;

@@ -160,18 +160,19 @@ inline double maxRelativeDifference(const Image& a, const Image& b) {
 }
 
 // The frames (G-buffer and 1-spp beauty) of a small rendered sequence: 96x64, 4 frames.
-inline std::vector<Frame> renderSmallSequence(const std::string& scene) {
+inline std::vector<Frame> renderSmallSequence(const std::string& scene, int width = 96,
+                                              int height = 64, int frames = 4) {
     TempFolder dir("small-" + scene);
     render::RenderSettings r;
-    r.width = 96;
-    r.height = 64;
-    r.frames = 4;
+    r.width = width;
+    r.height = height;
+    r.frames = frames;
     r.gbufferOnly = true;
     render::renderSequence(scene, r, dir.path());
     Sequence sequence(dir.path());
-    std::vector<Frame> frames;
-    for (int i = 0; i < sequence.frameCount(); ++i) frames.push_back(sequence.readFrame(i));
-    return frames;
+    std::vector<Frame> result;
+    for (int i = 0; i < sequence.frameCount(); ++i) result.push_back(sequence.readFrame(i));
+    return result;
 }
 
 }  // namespace rtd::test

@@ -1,5 +1,7 @@
 #include "devices/device.h"
 
+#include <cstring>
+
 #include "devices/cpu/cpu_kernels.h"
 #include "rtdenoise/denoiser.h"
 #include "rtdenoise/error.h"
@@ -28,6 +30,17 @@ std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa) {
     }
 #endif
     throw Error(ErrorCode::InvalidArgument, "unknown device type");
+}
+
+void parallelCopy(void* dst, const void* src, std::size_t bytes) {
+    constexpr std::size_t kPiece = std::size_t(1) << 20;  // 1 MiB per task
+    const long pieces = long((bytes + kPiece - 1) / kPiece);
+#pragma omp parallel for schedule(static)
+    for (long k = 0; k < pieces; ++k) {
+        std::size_t start = std::size_t(k) * kPiece;
+        std::size_t n = bytes - start < kPiece ? bytes - start : kPiece;
+        std::memcpy(static_cast<char*>(dst) + start, static_cast<const char*>(src) + start, n);
+    }
 }
 
 std::string gpuName() {

@@ -55,6 +55,9 @@ class Device {
     std::size_t allocatedBytes_ = 0;
 };
 
+// memcpy on every core (OpenMP), for host-side staging copies of whole frames.
+void parallelCopy(void* dst, const void* src, std::size_t bytes);
+
 // Throws rtd::Error(DeviceFailure) if the requested device is not available.
 std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa = CpuIsa::Auto);
 std::unique_ptr<Device> createCpuDevice(CpuIsa isa = CpuIsa::Auto);
