@@ -57,9 +57,11 @@ class CudaDevice final : public Device {
     }
     ~CudaDevice() override {
         cudaStreamSynchronize(stream_);
+        // Only what was made: destroying a null event would leave an error for the next
+        // launch's check to report (in another Denoiser on this thread).
         for (int k = 0; k < kStageSlots; ++k) {
-            cudaEventDestroy(stageFree_[k]);
-            cudaFreeHost(stage_[k]);
+            if (stageFree_[k]) cudaEventDestroy(stageFree_[k]);
+            if (stage_[k]) cudaFreeHost(stage_[k]);
         }
         for (cudaEvent_t e : events_) cudaEventDestroy(e);
         cudaFree(counters_);
