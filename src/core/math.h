@@ -123,9 +123,10 @@ RTD_HOST_DEVICE RTD_INLINE float logPositive(float x) {
 }
 
 // a / b and sqrt(x) inside the filters' weights, where a few ulp do not matter: the GPU's
-// approximate instructions (2 ulp, no IEEE slow path), about 1.4x faster for the JBF and A-Trous
-// there. The CPU's vector division and square root are already fast. Not for geometry (the
-// reprojection's divisions decide validity tests, which must come out the same on every back end).
+// approximate instructions (2 ulp, no IEEE slow path); the CPU's vector division and square root
+// are already fast. Only here: nvcc's whole-file -prec-div=false -prec-sqrt=false -ftz=true made
+// the JBF and A-Trous about 1.4x faster on an H100 but moved the reprojection's validity
+// decisions, and the course-scene CPU/CUDA equivalence test failed.
 RTD_HOST_DEVICE RTD_INLINE float divideApprox(float a, float b) {
 #if defined(__CUDA_ARCH__)
     return __fdividef(a, b);
