@@ -142,7 +142,11 @@ inline CliResult runCli(const std::string& arguments, const std::string& environ
 
 // A path quoted for the shell command line above.
 inline std::string quoted(const std::filesystem::path& p) {
-    return "'" + p.string() + "'";
+    // Appended, not "'" + ... : g++ 12 warns falsely (-Wrestrict) about the operator+ form.
+    std::string q = "'";
+    q += p.string();
+    q += '\'';
+    return q;
 }
 
 inline std::filesystem::path boxFolder() {
