@@ -327,6 +327,24 @@ TEST(Denoiser, InconsistentFramesAreRejectedWithAReason) {
     EXPECT_NO_THROW(denoiser.processFrame(good));
 }
 
+// The ingest finds a bad ID only after the frame's passes ran: the refused frame must still leave
+// the history as it was, so the next frame's result is what it would have been without it.
+TEST(Denoiser, ARefusedFrameLeavesTheHistoryAsItWas) {
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 48, 32, 3);
+    Frame bad = frames[2];
+    bad.objectId[40] = int(bad.objectToWorld.size());
+    for (Method method : {Method::Temporal, Method::Svgf}) {
+        Denoiser plain(settingsFor(method)), interrupted(settingsFor(method));
+        plain.processFrame(frames[0]);
+        interrupted.processFrame(frames[0]);
+        plain.processFrame(frames[1]);
+        interrupted.processFrame(frames[1]);
+        EXPECT_THROW(interrupted.processFrame(bad), Error);
+        EXPECT_EQ(interrupted.processFrame(frames[2]).pixels, plain.processFrame(frames[2]).pixels)
+            << toString(method);
+    }
+}
+
 TEST(Denoiser, SettingsOutOfRangeAreRejected) {
     DenoiserSettings s = settingsFor(Method::Jbf);
     s.edges.sigmaColor = 0.0f;
