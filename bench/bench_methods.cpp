@@ -7,6 +7,7 @@
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -61,14 +62,18 @@ bool skipWithoutFrames(benchmark::State& state) {
     return true;
 }
 
-void runMethod(benchmark::State& state, Method method, SpatialFilter filter) {
+// The frame's device time is given as the manual time, which the cases registered with
+// UseManualTime (the GPU's) report; the others report real time.
+void runMethod(benchmark::State& state, Method method, SpatialFilter filter,
+               DeviceType device = DeviceType::Cpu) {
     if (skipWithoutFrames(state)) return;
-    SteadyState run(method, filter);
+    SteadyState run(method, filter, device);
     std::vector<double> passTotals(run.denoiser.passes().size(), 0.0);
     for (auto _ : state) {
         run.next();
         benchmark::DoNotOptimize(run.output.pixels.data());
         const FrameStats& stats = run.denoiser.lastFrameStats();
+        state.SetIterationTime(stats.deviceMilliseconds / 1000.0);
         for (std::size_t p = 0; p < passTotals.size(); ++p)
             passTotals[p] += stats.passMilliseconds[p];
     }
@@ -156,9 +161,11 @@ void registerPassBenchmarks() {
 // The GPU's cases, registered only where a CUDA denoiser can be made.
 void registerCudaBenchmarks() {
     DenoiserSettings settings;
+    settings.method = Method::Svgf;
     settings.device = DeviceType::Cuda;
+    std::unique_ptr<Denoiser> svgf;  // its pass list names the per-pass cases
     try {
-        Denoiser probe(settings);
+        svgf = std::make_unique<Denoiser>(settings);
     } catch (const Error&) {
         return;
     }
@@ -166,34 +173,22 @@ void registerCudaBenchmarks() {
         SpatialFilter filter = method == Method::Jbf ? SpatialFilter::Jbf : SpatialFilter::Atrous;
         std::string name = std::string("BM_Cuda/") + toString(method);
         // Manual time: the pipeline on the GPU (FrameStats::deviceMilliseconds).
-        benchmark::RegisterBenchmark(
-            name.c_str(),
-            [method, filter](benchmark::State& state) {
-                if (skipWithoutFrames(state)) return;
-                SteadyState run(method, filter, DeviceType::Cuda);
-                for (auto _ : state) {
-                    run.next();
-                    state.SetIterationTime(run.denoiser.lastFrameStats().deviceMilliseconds /
-                                           1000.0);
-                }
-                state.SetLabel(run.denoiser.deviceName());
-            })
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [method, filter](benchmark::State& state) {
+                                         runMethod(state, method, filter, DeviceType::Cuda);
+                                     })
             ->Unit(benchmark::kMillisecond)
             ->UseManualTime()
             ->Iterations(200);
-        if (method != Method::Svgf) continue;
-        settings.method = method;
-        Denoiser probe(settings);
-        for (std::size_t p = 0; p < probe.passes().size(); ++p) {
-            std::string passName = "BM_Pass/cuda/svgf/" + probe.passes()[p].name;
-            benchmark::RegisterBenchmark(passName.c_str(),
-                                         [method, p](benchmark::State& state) {
-                                             runPass(state, method, p, DeviceType::Cuda);
-                                         })
-                ->Unit(benchmark::kMillisecond)
-                ->UseManualTime()
-                ->Iterations(200);
-        }
+    }
+    for (std::size_t p = 0; p < svgf->passes().size(); ++p) {
+        std::string name = "BM_Pass/cuda/svgf/" + svgf->passes()[p].name;
+        benchmark::RegisterBenchmark(
+            name.c_str(),
+            [p](benchmark::State& state) { runPass(state, Method::Svgf, p, DeviceType::Cuda); })
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime()
+            ->Iterations(200);
     }
 }
 
