@@ -42,3 +42,12 @@ using PixelIndex = long;
 #else
 #define RTD_SHORT_VECTOR_LOOP
 #endif
+
+// At the top of a function body: no reassociation of its floating-point arithmetic, whatever
+// the file's flags. Clang's reassociation (-fassociative-math) turns `a * (1 / b)`, with 1 / b
+// hoisted out of a filter's tap loop, back into `a / b` on every tap, a vector division each.
+#if defined(__clang__) && !defined(__CUDACC__)
+#define RTD_NO_REASSOCIATION _Pragma("clang fp reassociate(off)")
+#else
+#define RTD_NO_REASSOCIATION
+#endif

@@ -75,14 +75,16 @@ RTD_HOST_DEVICE RTD_INLINE bool isFinite(float v) {
     return (bits & 0x7f800000u) != 0x7f800000u;
 }
 
-// e^x for x <= 0 (the filters' weights): 2^t = 2^floor(t) * p(frac(t)), p a degree-5
-// near-minimax fit of 2^f on [0,1) with p(0) = 1 (relative error 8e-8); rounding x * log2(e) adds
-// up to 1e-5 relative at large |x|. Results under 2^-126 flush to 0.
-RTD_HOST_DEVICE RTD_INLINE float expNegative(float x) {
+constexpr float kLog2e = 1.44269504f;
+
+// 2^t for t <= 0 (the filters' weights, with their exponents in base 2): 2^floor(t) p(frac(t)),
+// p a degree-5 near-minimax fit of 2^f on [0,1) with p(0) = 1 (relative error 8e-8). Results
+// under 2^-126 flush to 0. GPU: its exp2 instruction (2 ulp).
+RTD_HOST_DEVICE RTD_INLINE float exp2Negative(float t) {
 #if defined(__CUDA_ARCH__)
-    return __expf(x);
+    return exp2f(t);
 #else
-    float t = maxf(x * 1.44269504f, -126.0f);
+    t = maxf(t, -126.0f);
     float whole = std::floor(t);
     float f = t - whole;
     float p = 1.86713060e-3f;
@@ -98,11 +100,20 @@ RTD_HOST_DEVICE RTD_INLINE float expNegative(float x) {
 #endif
 }
 
-// ln(x) for normal x > 0: x = 2^e m, m in [1, 2), ln(m) = t q(t) with t = m - 1 and q a degree-6
-// near-minimax fit (|error| < 2.2e-7). Branch-free, so it vectorises.
-RTD_HOST_DEVICE RTD_INLINE float logPositive(float x) {
+// e^x for x <= 0: 2^(x log2 e); rounding x * log2(e) adds up to 1e-5 relative at large |x|.
+RTD_HOST_DEVICE RTD_INLINE float expNegative(float x) {
 #if defined(__CUDA_ARCH__)
-    return __logf(x);
+    return __expf(x);
+#else
+    return exp2Negative(x * kLog2e);
+#endif
+}
+
+// log2(x) for normal x > 0: x = 2^e m, m in [1, 2), ln(m) = t q(t) with t = m - 1 and q a
+// degree-6 near-minimax fit (|error| < 2.2e-7). Branch-free, so it vectorises.
+RTD_HOST_DEVICE RTD_INLINE float log2Positive(float x) {
+#if defined(__CUDA_ARCH__)
+    return __log2f(x);
 #else
     std::int32_t bits;
     std::memcpy(&bits, &x, sizeof bits);
@@ -118,7 +129,16 @@ RTD_HOST_DEVICE RTD_INLINE float logPositive(float x) {
     q = q * t + 3.28242120e-1f;
     q = q * t - 4.99471772e-1f;
     q = q * t + 9.99981138e-1f;
-    return exponent * 0.693147181f + t * q;
+    return exponent + t * q * kLog2e;
+#endif
+}
+
+// ln(x) for normal x > 0.
+RTD_HOST_DEVICE RTD_INLINE float logPositive(float x) {
+#if defined(__CUDA_ARCH__)
+    return __logf(x);
+#else
+    return log2Positive(x) * 0.693147181f;
 #endif
 }
 

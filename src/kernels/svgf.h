@@ -25,31 +25,47 @@ struct SvgfTerms {
     int separateObjects;   // pixels of another object never contribute
 };
 
+// What the SVGF weight needs of the centre pixel, shared by all its taps.
+struct SvgfCentre {
+    float depth;
+    Float3 normal;
+    float luminance;
+    float luminanceScale;  // log2(e) / phi_l: the luminance term in base 2
+};
+
+// The depth term's scale for a tap `offset` pixels away, log2(e) / (sigma_z |grad z . offset| +
+// eps): one division serves the taps at +offset and -offset (the slope's magnitude is the same).
+RTD_HOST_DEVICE RTD_INLINE float svgfDepthScale(const SvgfTerms& t, float depthAlongOffset) {
+    float slope = depthAlongOffset < 0 ? -depthAlongOffset : depthAlongOffset;
+    return divideApprox(kLog2e, t.sigmaDepth * slope + 1e-3f);
+}
+
 // The SVGF edge-stopping weight between a centre and a tap (before the tap mask and kernel):
-//   exp(-|dz| / (sigma_z |grad z . offset| + eps) - |dl| / phiLuminance) * max(0, n.n')^sigma_n
-// (`inversePhiLuminance` = 1 / phiLuminance, computed once per centre pixel).
+//   exp(-|dz| / (sigma_z |grad z . offset| + eps) - |dl| / phi_l) * max(0, n.n')^sigma_n
+// evaluated as 2^(-|dz| depthScale - |dl| luminanceScale) with both scales precomputed.
 // NormalSquarings < 0: any sigma_n, the normal factor folded into the exponent as
-// sigma_n ln(n.n'). NormalSquarings = k: sigma_n = 2^k (the paper's 128 is k = 7), the factor by
+// sigma_n log2(n.n'). NormalSquarings = k: sigma_n = 2^k (the paper's 128 is k = 7), the factor by
 // k squarings: the same value with no logarithm per tap (an A-Trous iteration ~25% faster).
 template <int NormalSquarings>
-RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, float depthI, float depthJ,
-                                            float depthAlongOffset, Float3 normalI, Float3 normalJ,
-                                            float lumI, float lumJ, float inversePhiLuminance) {
-    float dz = depthI - depthJ;
-    float slope = depthAlongOffset < 0 ? -depthAlongOffset : depthAlongOffset;
-    float wz = divideApprox(dz < 0 ? -dz : dz, t.sigmaDepth * slope + 1e-3f);
-    float dl = lumI - lumJ;
-    float wl = (dl < 0 ? -dl : dl) * inversePhiLuminance;
-    float cosine = dot(normalI, normalJ);
+RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre& c,
+                                            float depthScale, float depthJ, Float3 normalJ,
+                                            float lumJ) {
+    // Reassociated, clang turns the multiplication by the precomputed scales back into a vector
+    // division per tap.
+    RTD_NO_REASSOCIATION
+    float dz = c.depth - depthJ;
+    float dl = c.luminance - lumJ;
+    float e = (dz < 0 ? -dz : dz) * depthScale + (dl < 0 ? -dl : dl) * c.luminanceScale;
+    float cosine = dot(c.normal, normalJ);
     if constexpr (NormalSquarings < 0) {
-        // n.n' <= 0 gives ln(1e-30) * sigma_n: a weight of exactly 0 after the exp.
-        float wn = t.sigmaNormal * logPositive(maxf(cosine, 1e-30f));
-        return expNegative(minf(wn - wz - wl, 0.0f));
+        // n.n' <= 0 gives sigma_n log2(1e-30): a weight of exactly 0.
+        float wn = t.sigmaNormal * log2Positive(maxf(cosine, 1e-30f));
+        return exp2Negative(minf(wn - e, 0.0f));
     } else {
         float p = clampf(cosine, 0.0f, 1.0f);
         RTD_UNROLL
         for (int k = 0; k < NormalSquarings; ++k) p *= p;
-        return p * expNegative(-wz - wl);
+        return p * exp2Negative(-e);
     }
 }
 
@@ -206,10 +222,10 @@ struct SvgfVarianceKernel {
         // everywhere may hold 3.9999998, depending on how each back end rounds. The tolerance
         // keeps the branch the same on every back end.
         if (id < 0 || h >= shortHistory - 1e-3f) return;
-        float zI = g.depth[i], dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
-        Float3 nI = g.normal.load(i);
-        float lI = luminance(c);
-        float inverseSigmaLuminance = 1.0f / terms.sigmaLuminance;  // no variance yet
+        float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
+        // No variance yet: phi_l = sigma_l.
+        SvgfCentre centre{g.depth[i], g.normal.load(i), luminance(c),
+                          kLog2e / terms.sigmaLuminance};
         // The neighbourhood's luminance variance, with each tap's mean taken relative to the
         // centre's (shifted data: no cancellation).
         float centreMean = moments.at(0, i);
@@ -220,16 +236,15 @@ struct SvgfVarianceKernel {
         for (int dx = -kRadius; dx <= kRadius; ++dx) {
             PixelIndex j = i + L.offset(dx, dy);
             Float3 cj = illumination.load(j);
-            float along = dzdx * float(dx) + dzdy * float(dy);
+            float depthScale = svgfDepthScale(terms, dzdx * float(dx) + dzdy * float(dy));
             Float3 nJ = g.normal.load(j);
             // A scalar (sparse) kernel: a branch on the setting costs nothing here.
-            float w =
-                svgfTapMask(terms, id, g.objectId[j]) *
-                (normalFactorBySquarings(terms)
-                     ? svgfWeight<kPaperNormalSquarings>(terms, zI, g.depth[j], along, nI, nJ, lI,
-                                                         luminance(cj), inverseSigmaLuminance)
-                     : svgfWeight<-1>(terms, zI, g.depth[j], along, nI, nJ, lI, luminance(cj),
-                                      inverseSigmaLuminance));
+            float w = svgfTapMask(terms, id, g.objectId[j]) *
+                      (normalFactorBySquarings(terms)
+                           ? svgfWeight<kPaperNormalSquarings>(terms, centre, depthScale,
+                                                               g.depth[j], nJ, luminance(cj))
+                           : svgfWeight<-1>(terms, centre, depthScale, g.depth[j], nJ,
+                                            luminance(cj)));
             float shifted = moments.at(0, j) - centreMean;
             sum += cj * w;
             m1 += shifted * w;
@@ -254,15 +269,16 @@ struct SvgfAtrous {
     SvgfTerms terms;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        constexpr float kB3[5] = {0.0625f, 0.25f, 0.375f, 0.25f, 0.0625f};
+        constexpr float kB3[3] = {0.375f, 0.25f, 0.0625f};  // by |tap offset| / stride
         constexpr float kGauss[2] = {0.25f, 0.125f};  // 3x3: 1/4 centre, 1/8 edges, 1/16 corners
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         std::int32_t id = g.objectId[i];
         Float3 cI = in.rgb().load(i);
+        float varianceI = in.at(3, i);
         if (id < 0) {
             out.rgb().store(i, cI);
-            out.at(3, i) = in.at(3, i);
+            out.at(3, i) = varianceI;
             return;
         }
         float prefiltered = 0.0f, prefilterW = 0.0f;
@@ -276,31 +292,38 @@ struct SvgfAtrous {
                 prefiltered += m * in.at(3, j);
                 prefilterW += m;
             }
-        float inversePhiLuminance =
-            1.0f /
-            (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f);
-        float zI = g.depth[i], dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
-        Float3 nI = g.normal.load(i);
-        float lI = luminance(cI);
-        Float3 sum;
-        float sumVar = 0.0f, sumW = 0.0f;
+        SvgfCentre c{g.depth[i], g.normal.load(i), luminance(cI),
+                     kLog2e / (terms.sigmaLuminance *
+                                   std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) +
+                               1e-10f)};
+        // The depth change over one tap step.
+        float stepX = derivatives.at(0, i) * float(stride);
+        float stepY = derivatives.at(1, i) * float(stride);
+        // The centre: weight 1 (no depth, luminance or normal difference) times its kernel value.
+        constexpr float kCentre = kB3[0] * kB3[0];
+        Float3 sum = cI * kCentre;
+        float sumVar = kCentre * kCentre * varianceI, sumW = kCentre;
+        // The other 24 taps as 12 pairs at +offset and -offset, which share their kernel value
+        // and their depth scale (one division per pair).
         RTD_UNROLL
-        for (int ty = 0; ty < 5; ++ty) {
+        for (int pair = 0; pair < 12; ++pair) {
+            int ax = pair % 5 - 2, ay = pair / 5 - 2;  // the taps before the centre, raster order
+            float k = kB3[ax < 0 ? -ax : ax] * kB3[ay < 0 ? -ay : ay];
+            float depthScale = svgfDepthScale(terms, stepX * float(ax) + stepY * float(ay));
+            PixelIndex o = L.offset(ax * stride, ay * stride);
             RTD_UNROLL
-            for (int tx = 0; tx < 5; ++tx) {
-                int ox = (tx - 2) * stride, oy = (ty - 2) * stride;
-                PixelIndex j = i + L.offset(ox, oy);
+            for (int side = 0; side < 2; ++side) {
+                PixelIndex j = side == 0 ? i + o : i - o;
                 Float3 cj = in.rgb().load(j);
-                float w = svgfTapMask(terms, id, g.objectId[j]) * (kB3[tx] * kB3[ty]) *
-                          svgfWeight<NormalSquarings>(
-                              terms, zI, g.depth[j], dzdx * float(ox) + dzdy * float(oy), nI,
-                              g.normal.load(j), lI, luminance(cj), inversePhiLuminance);
+                float w = svgfTapMask(terms, id, g.objectId[j]) * k *
+                          svgfWeight<NormalSquarings>(terms, c, depthScale, g.depth[j],
+                                                      g.normal.load(j), luminance(cj));
                 sum += cj * w;
                 sumVar += w * w * in.at(3, j);
                 sumW += w;
             }
         }
-        float inv = 1.0f / maxf(sumW, 1e-20f);  // the centre alone gives (3/8)^2
+        float inv = 1.0f / sumW;  // >= (3/8)^2, the centre's
         out.rgb().store(i, sum * inv);
         out.at(3, i) = sumVar * inv * inv;
     }
