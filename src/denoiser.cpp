@@ -405,9 +405,15 @@ struct Denoiser::Impl {
                 SvgfTerms wide = terms;
                 wide.sigmaLuminance = 10.0f;
                 constexpr float kShortHistory = 4.0f;  // frames: below, estimate spatially
-                launch(SvgfVarianceKernel{gbuffer(), planeSet(derivatives), planes(illumination),
-                                          planeSet(moments[current]), historyLength[current].data(),
-                                          planeSet(varianceOut), wide, kShortHistory});
+                auto run = [&]<class Kernel>() {
+                    launch(Kernel{gbuffer(), planeSet(derivatives), planes(illumination),
+                                  planeSet(moments[current]), historyLength[current].data(),
+                                  planeSet(varianceOut), wide, kShortHistory});
+                };
+                if (normalFactorBySquarings(wide))  // no logarithm per tap
+                    run.template operator()<SvgfVarianceNormal128Kernel>();
+                else
+                    run.template operator()<SvgfVarianceKernel>();
             });
         // Iterations read the variance pass's output (kept for the debug view), then ping-pong
         // between filterA and filterB; the feedback iteration writes the next frame's colour

@@ -31,6 +31,7 @@
     X(SvgfTemporalKernel)         \
     X(SvgfTemporalSearchKernel)   \
     X(SvgfVarianceKernel)         \
+    X(SvgfVarianceNormal128Kernel) \
     X(SvgfAtrousKernel)           \
     X(SvgfAtrousNormal128Kernel)  \
     X(ModulateKernel)

@@ -199,9 +199,11 @@ using SvgfTemporalSearchKernel = SvgfTemporal<true>;
 // Variance where fewer than `shortHistory` frames are accumulated: from the moments of a 7x7
 // edge-aware neighbourhood (which also filters the illumination), boosted by shortHistory / h
 // for the first frames as in the paper. Elsewhere the temporal pass's output (the moments'
-// variance) stands. Sparse: most pixels have a long history after the first frames.
-struct SvgfVarianceKernel {
-    static constexpr bool kSparse = true;  // the CPU launcher keeps it scalar
+// variance) stands. Block-sparse (active()): after the first frames few pixels have a short
+// history, and those lie together (disocclusions), so the CPU launcher runs the vectorised body
+// only on runs of pixels with at least one active.
+template <int NormalSquarings>
+struct SvgfVariance {
     GBufferView g;
     PlaneSet derivatives;
     Planes3 illumination;
@@ -212,50 +214,58 @@ struct SvgfVarianceKernel {
     float shortHistory;
     static constexpr int kRadius = kSvgfWindowRadius;  // unrolled
 
+    // The history length is a bilinear mix of the taps' lengths: a pixel with 4 frames
+    // everywhere may hold 3.9999998, depending on how each back end rounds. The tolerance keeps
+    // the decision the same on every back end.
+    RTD_HOST_DEVICE RTD_INLINE bool active(int x, int y) const {
+        PixelIndex i = g.layout.index(x, y);
+        return g.objectId[i] >= 0 && length[i] < shortHistory - 1e-3f;
+    }
+
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        if (!active(x, y)) return;
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 c = illumination.load(i);
         std::int32_t id = g.objectId[i];
         float h = length[i];
-        // The history length is a bilinear mix of the taps' lengths: a pixel with 4 frames
-        // everywhere may hold 3.9999998, depending on how each back end rounds. The tolerance
-        // keeps the branch the same on every back end.
-        if (id < 0 || h >= shortHistory - 1e-3f) return;
         float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
         // No variance yet: phi_l = sigma_l.
         SvgfCentre centre{g.depth[i], g.normal.load(i), luminance(c),
                           kLog2e / terms.sigmaLuminance};
         // The neighbourhood's luminance variance, with each tap's mean taken relative to the
-        // centre's (shifted data: no cancellation).
+        // centre's (shifted data: no cancellation). The centre: weight 1, shifted mean 0.
         float centreMean = moments.at(0, i);
-        Float3 sum;
-        float m1 = 0.0f, m2 = 0.0f, sumW = 0.0f;
+        Float3 sum = c;
+        float m1 = 0.0f, m2 = moments.at(1, i), sumW = 1.0f;
+        // The other 48 taps in +/- offset pairs sharing their depth scale (as in SvgfAtrous).
+        constexpr int kWidth = 2 * kRadius + 1;
         RTD_UNROLL
-        for (int dy = -kRadius; dy <= kRadius; ++dy) RTD_UNROLL
-        for (int dx = -kRadius; dx <= kRadius; ++dx) {
-            PixelIndex j = i + L.offset(dx, dy);
-            Float3 cj = illumination.load(j);
-            float depthScale = svgfDepthScale(terms, dzdx * float(dx) + dzdy * float(dy));
-            Float3 nJ = g.normal.load(j);
-            // A scalar (sparse) kernel: a branch on the setting costs nothing here.
-            float w = svgfTapMask(terms, id, g.objectId[j]) *
-                      (normalFactorBySquarings(terms)
-                           ? svgfWeight<kPaperNormalSquarings>(terms, centre, depthScale,
-                                                               g.depth[j], nJ, luminance(cj))
-                           : svgfWeight<-1>(terms, centre, depthScale, g.depth[j], nJ,
-                                            luminance(cj)));
-            float shifted = moments.at(0, j) - centreMean;
-            sum += cj * w;
-            m1 += shifted * w;
-            m2 += (moments.at(1, j) + shifted * shifted) * w;
-            sumW += w;
+        for (int pair = 0; pair < kWidth * kRadius + kRadius; ++pair) {
+            int ax = pair % kWidth - kRadius, ay = pair / kWidth - kRadius;
+            float depthScale = svgfDepthScale(terms, dzdx * float(ax) + dzdy * float(ay));
+            PixelIndex o = L.offset(ax, ay);
+            RTD_UNROLL
+            for (int side = 0; side < 2; ++side) {
+                PixelIndex j = side == 0 ? i + o : i - o;
+                Float3 cj = illumination.load(j);
+                float w = svgfTapMask(terms, id, g.objectId[j]) *
+                          svgfWeight<NormalSquarings>(terms, centre, depthScale, g.depth[j],
+                                                      g.normal.load(j), luminance(cj));
+                float shifted = moments.at(0, j) - centreMean;
+                sum += cj * w;
+                m1 += shifted * w;
+                m2 += (moments.at(1, j) + shifted * shifted) * w;
+                sumW += w;
+            }
         }
-        float inv = 1.0f / maxf(sumW, 1e-20f);  // the centre has weight 1
+        float inv = 1.0f / sumW;  // >= 1, the centre's
         out.rgb().store(i, sum * inv);
         out.at(3, i) = maxf(m2 * inv - square(m1 * inv), 0.0f) * (shortHistory / maxf(h, 1.0f));
     }
 };
+using SvgfVarianceKernel = SvgfVariance<-1>;  // any sigma_n
+using SvgfVarianceNormal128Kernel = SvgfVariance<kPaperNormalSquarings>;
 
 // One variance-guided A-Trous iteration: 5x5 B3-spline taps at `stride`, luminance tolerance
 // sigma_l times the 3x3-Gaussian-prefiltered standard deviation; the variance is carried with

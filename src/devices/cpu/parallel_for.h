@@ -2,6 +2,8 @@
 // row loop so the compiler can vectorise it across neighbouring pixels.
 #pragma once
 
+#include <concepts>
+
 #if defined(__SSE__)
 #include <xmmintrin.h>
 #endif
@@ -29,25 +31,53 @@ constexpr bool isSparse() {
         return false;
 }
 
+// A kernel with `bool active(int x, int y) const` (whose body does nothing where it is false)
+// is block-sparse: its work concerns few pixels but those lie together, so each run of
+// kSparseBlock pixels is tested first (vectorised) and the vectorised body runs only on runs
+// with an active pixel.
+template <class Kernel>
+concept BlockSparse = requires(const Kernel& k) {
+    { k.active(0, 0) } -> std::same_as<bool>;
+};
+constexpr int kSparseBlock = 16;  // one AVX-512 vector of floats
+
+// One row of [x0, x1): scalar, block-sparse or vectorised, as the kernel declares.
+template <class Kernel>
+RTD_INLINE void runRow(const Kernel& kernel, int x0, int x1, int y) {
+    if constexpr (isSparse<Kernel>()) {
+#if defined(__clang__)
+#pragma clang loop vectorize(disable)
+#endif
+        for (int x = x0; x < x1; ++x) kernel(x, y);
+    } else if constexpr (BlockSparse<Kernel>) {
+        for (int b0 = x0; b0 < x1; b0 += kSparseBlock) {
+            int b1 = b0 + kSparseBlock < x1 ? b0 + kSparseBlock : x1;
+            int active = 0;
+#if !defined(RTD_CPU_SCALAR)
+#pragma omp simd reduction(| : active)
+#endif
+            for (int x = b0; x < b1; ++x) active |= kernel.active(x, y) ? 1 : 0;
+            if (!active) continue;
+#if !defined(RTD_CPU_SCALAR)
+#pragma omp simd
+#endif
+            for (int x = b0; x < b1; ++x) kernel(x, y);
+        }
+    } else {
+#if !defined(RTD_CPU_SCALAR)
+#pragma omp simd
+#endif
+        for (int x = x0; x < x1; ++x) kernel(x, y);
+    }
+}
+
 template <class Kernel>
 void parallelFor2D(int width, int height, const Kernel& kernel) {
 #pragma omp parallel
     {
         flushDenormalsToZero();
 #pragma omp for schedule(dynamic, 4)
-        for (int y = 0; y < height; ++y) {
-            if constexpr (isSparse<Kernel>()) {
-#if defined(__clang__)
-#pragma clang loop vectorize(disable)
-#endif
-                for (int x = 0; x < width; ++x) kernel(x, y);
-            } else {
-#if !defined(RTD_CPU_SCALAR)
-#pragma omp simd
-#endif
-                for (int x = 0; x < width; ++x) kernel(x, y);
-            }
-        }
+        for (int y = 0; y < height; ++y) runRow(kernel, 0, width, y);
     }
 }
 
