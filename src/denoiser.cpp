@@ -109,6 +109,7 @@ struct Denoiser::Impl {
     // svgf only
     DeviceBuffer<float> illumination, varianceOut, filterA, filterB;  // 3, 4, 4, 4 planes
     DeviceBuffer<float> moments[2], historyLength[2], feedback[2];    // 2, 1, 4 planes
+    DeviceBuffer<float> svgfHistory;  // kSvgfHistoryPlanes: the reprojected history
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
@@ -148,29 +149,11 @@ struct Denoiser::Impl {
                 settings.history.normalTolerance};
     }
     template <class Kernel>
-    void launchSvgfTemporal(const DeviceBuffer<float>& in, const SvgfSettings& sv) {
-        launch(Kernel{gbuffer(),
-                      previousGeometry(),
-                      objects.data(),
-                      objectCount,
-                      planeSet(derivatives),
-                      historyTest(),
-                      planes(in),
-                      sums(),
-                      kSvgfWindowRadius,
-                      sv.historyClampK,
-                      planeSet(feedback[previous()]),
-                      planeSet(moments[previous()]),
-                      historyLength[previous()].data(),
-                      planes(illumination),
-                      planeSet(moments[current]),
-                      historyLength[current].data(),
-                      validity.data(),
-                      planeSet(varianceOut),
-                      sv.alpha,
-                      sv.momentsAlpha,
-                      float(sv.maxHistory),
-                      hasHistory ? 1 : 0});
+    void launchSvgfReproject() {
+        launch(Kernel{gbuffer(), previousGeometry(), objects.data(), objectCount,
+                      planeSet(derivatives), historyTest(), planeSet(feedback[previous()]),
+                      planeSet(moments[previous()]), historyLength[previous()].data(),
+                      planeSet(svgfHistory), validity.data(), hasHistory ? 1 : 0});
     }
 
     // A window kernel (window_sums.h) in the instantiation that covers `radius`: the 7x7 one
@@ -244,6 +227,7 @@ struct Denoiser::Impl {
             varianceOut = planesBuffer(4);
             filterA = planesBuffer(4);
             filterB = planesBuffer(4);
+            svgfHistory = planesBuffer(kSvgfHistoryPlanes);
             for (int k = 0; k < 2; ++k) {
                 moments[k] = planesBuffer(2);
                 historyLength[k] = planesBuffer(1);
@@ -385,17 +369,24 @@ struct Denoiser::Impl {
                 launch(ColorRowSumsKernel{gbuffer(), planes(*in), sums(), kSvgfWindowRadius});
             });
         }
-        std::vector<std::string> temporalInputs = {
-            inName,        "windowSums",        "position", "normal",  "depth",         "objectId",
-            "derivatives", "previous geometry", "feedback", "moments", "historyLength", "matrices"};
-        std::vector<std::string> temporalOutputs = {"illumination", "moments", "historyLength",
-                                                    "validity", "illumination+variance"};
-        addPass("svgf-temporal", temporalInputs, temporalOutputs,
-                [this, in, sv] { launchSvgfTemporal<SvgfTemporalKernel>(*in, sv); });
+        std::vector<std::string> reprojectInputs = {
+            "position",    "normal",  "depth",         "objectId", "derivatives", "previous geometry",
+            "feedback",    "moments", "historyLength", "matrices"};
+        addPass("svgf-reproject", reprojectInputs, {"history", "validity"},
+                [this] { launchSvgfReproject<SvgfReprojectKernel>(); });
         // The pixels whose bilinear taps all failed, again with the 3x3 search (few: sparse).
-        temporalInputs.push_back("validity");
-        addPass("svgf-temporal-search", temporalInputs, temporalOutputs,
-                [this, in, sv] { launchSvgfTemporal<SvgfTemporalSearchKernel>(*in, sv); });
+        reprojectInputs.push_back("validity");
+        addPass("svgf-reproject-search", reprojectInputs, {"history", "validity"},
+                [this] { launchSvgfReproject<SvgfReprojectSearchKernel>(); });
+        addPass("svgf-accumulate", {inName, "windowSums", "objectId", "history", "validity"},
+                {"illumination", "moments", "historyLength", "illumination+variance"},
+                [this, in, sv] {
+                    launch(SvgfAccumulateKernel{
+                        gbuffer(), planes(*in), sums(), kSvgfWindowRadius, sv.historyClampK,
+                        planeSet(svgfHistory), validity.data(), planes(illumination),
+                        planeSet(moments[current]), historyLength[current].data(),
+                        planeSet(varianceOut), sv.alpha, sv.momentsAlpha, float(sv.maxHistory)});
+                });
         // Short histories only (sparse): the temporal passes wrote the rest.
         addPass(
             "svgf-variance",

@@ -64,7 +64,7 @@ TEST(Cli, DenoisesASequenceIntoResultFiles) {
             EXPECT_TRUE(fs::exists(dir.path() / "out" / (view + n + ".png"))) << view << n;
     }
     EXPECT_NE(r.output.find("frame 3/3"), std::string::npos) << r.output;      // progress
-    EXPECT_NE(r.output.find("svgf-temporal"), std::string::npos) << r.output;  // per-pass summary
+    EXPECT_NE(r.output.find("svgf-accumulate"), std::string::npos) << r.output;  // per-pass summary
     Image result = readExr(dir.path() / "out" / "result_2.exr", {{"R"}, {"G"}, {"B"}});
     EXPECT_EQ(result.width, 24);
     EXPECT_EQ(result.height, 16);
@@ -161,7 +161,7 @@ TEST(Cli, BenchReportsEveryCaseAsTableAndJson) {
         quoted(dir.path() / "cache") + " --json " + quoted(dir.path() / "bench.json"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("machine:"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("svgf-temporal"), std::string::npos) << r.output;  // per pass
+    EXPECT_NE(r.output.find("svgf-accumulate"), std::string::npos) << r.output;  // per pass
     std::ifstream in(dir.path() / "bench.json");
     std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     EXPECT_NE(json.find("\"method\": \"atrous\""), std::string::npos) << json;

@@ -107,6 +107,7 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
     DeviceBuffer<float> moments[2] = {h.buffer(2), h.buffer(2)};
     DeviceBuffer<float> length[2] = {h.buffer(1), h.buffer(1)};
     DeviceBuffer<float> filterInput = h.buffer(4);
+    DeviceBuffer<float> history = h.buffer(kSvgfHistoryPlanes);
     DeviceBuffer<float> normalPlanes = h.buffer(3);
     for (int y = 0; y < hgt; ++y)
         for (int x = 0; x < w; ++x) {
@@ -131,28 +132,17 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
                 h.planes(h.a).store(h.layout.index(x, y), make3(v, v, v));
             }
         PreviousGeometry previous{h.ids.data(), h.depth.data(), h.planes(h.normal)};
-        h.device->launch(SvgfTemporalKernel{h.gbuffer(),
-                                            previous,
-                                            &identity,
-                                            1,
-                                            h.planeSet(derivatives),
-                                            HistoryTest{1, 10.0f, 16.0f},
-                                            h.planes(h.a),
-                                            h.sumPlanes(),
-                                            3,
-                                            0.0f,
-                                            h.planeSet(illumination[prev]),
-                                            h.planeSet(moments[prev]),
-                                            length[prev].data(),
-                                            h.planes(illumination[cur]),
-                                            h.planeSet(moments[cur]),
-                                            length[cur].data(),
-                                            h.validity.data(),
-                                            h.planeSet(filterInput),
-                                            0.0f,
-                                            0.0f,
-                                            32.0f,
-                                            n > 1 ? 1 : 0},
+        h.device->launch(
+            SvgfReprojectKernel{h.gbuffer(), previous, &identity, 1, h.planeSet(derivatives),
+                                HistoryTest{1, 10.0f, 16.0f}, h.planeSet(illumination[prev]),
+                                h.planeSet(moments[prev]), length[prev].data(),
+                                h.planeSet(history), h.validity.data(), n > 1 ? 1 : 0},
+            w, hgt);
+        h.device->launch(SvgfAccumulateKernel{h.gbuffer(), h.planes(h.a), h.sumPlanes(), 3, 0.0f,
+                                              h.planeSet(history), h.validity.data(),
+                                              h.planes(illumination[cur]),
+                                              h.planeSet(moments[cur]), length[cur].data(),
+                                              h.planeSet(filterInput), 0.0f, 0.0f, 32.0f},
                          w, hgt);
         double sum = 0, sum2 = 0, varianceEstimate = 0;
         for (int y = 0; y < hgt; ++y)

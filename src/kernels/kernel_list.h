@@ -28,8 +28,9 @@
     X(ReprojectKernel)            \
     X(AccumulateKernel)           \
     X(AccumulateWideKernel)       \
-    X(SvgfTemporalKernel)         \
-    X(SvgfTemporalSearchKernel)   \
+    X(SvgfReprojectKernel)        \
+    X(SvgfReprojectSearchKernel)  \
+    X(SvgfAccumulateKernel)       \
     X(SvgfVarianceKernel)         \
     X(SvgfVarianceNormal128Kernel) \
     X(SvgfAtrousKernel)           \

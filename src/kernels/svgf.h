@@ -79,19 +79,26 @@ RTD_HOST_DEVICE RTD_INLINE bool normalFactorBySquarings(const SvgfTerms& t) {
     return t.sigmaNormal == 128.0f;
 }
 
-RTD_HOST_DEVICE RTD_INLINE float svgfTapMask(const SvgfTerms& t, std::int32_t centreId,
-                                             std::int32_t tapId) {
-    bool ok = t.separateObjects ? tapId == centreId : tapId >= 0;
-    return ok ? 1.0f : 0.0f;
+RTD_HOST_DEVICE RTD_INLINE bool svgfTapAccepted(const SvgfTerms& t, std::int32_t centreId,
+                                                std::int32_t tapId) {
+    return t.separateObjects ? tapId == centreId : tapId >= 0;
 }
 
-// Two passes share this body: Search3x3 = false runs on every pixel with the bilinear taps
-// (branch-free, vectorised on the CPU); Search3x3 = true then revisits only the object pixels
-// whose bilinear taps all failed (code kReprojectionOtherObject) and redoes them with the 3x3
-// search. Those are few (disocclusion edges), so the second pass is a cheap sparse one and the
-// first does not pay for nine taps everywhere.
+// The temporal stage is three passes: reprojection (every pixel, bilinear taps), its 3x3 search
+// (sparse), then accumulation (every pixel). The split keeps the gathers at data-dependent
+// addresses in a kernel of their own: the accumulation, with its 7x7 window statistics, then
+// vectorises at the full width on the CPU (one kernel doing both ran at half width, spilling).
+// The history goes from the first to the last in SvgfHistory's 6 planes.
+constexpr int kSvgfHistoryPlanes = 6;  // rgb, luminance mean, luminance variance, length
+
+// Reprojection: the previous frame's illumination, moments and history length sampled at each
+// pixel's back-projected position (all 0 where the history test fails). Search3x3 = false runs on
+// every pixel with the bilinear taps (branch-free, vectorised on the CPU); Search3x3 = true then
+// revisits only the object pixels whose bilinear taps all failed (code kReprojectionOtherObject)
+// and redoes them with the 3x3 search. Those are few (disocclusion edges), so the second pass is
+// a cheap sparse one and the first does not pay for nine taps everywhere.
 template <bool Search3x3>
-struct SvgfTemporal {
+struct SvgfReproject {
     static constexpr bool kSparse = Search3x3;  // the CPU launcher keeps it scalar
     GBufferView g;
     PreviousGeometry previous;
@@ -99,48 +106,29 @@ struct SvgfTemporal {
     int objectCount;
     PlaneSet derivatives;
     HistoryTest test;
-    Planes3 radiance;  // noisy input, demodulated by the ingest, after firefly removal
-    PlaneSet rowSums;  // ColorRowSumsKernel over `radiance`: the anti-lag clamp's window
-    int clampRadius;   // <= kNarrowWindow
-    float clampK;      // 0: no clamp (the paper); else history clamped to mu +- k sigma
     PlaneSet previousIllumination;  // rgb (+ variance, unused here): last frame's feedback
     PlaneSet previousMoments;       // 2 planes: luminance mean, variance
     const float* previousLength;
-    Planes3 illumination;  // out
-    PlaneSet moments;      // out, 2 planes: luminance mean, variance
-    float* length;         // out: frames of history, 1 after a disocclusion
+    PlaneSet history;  // out: kSvgfHistoryPlanes
     std::uint8_t* validity;
-    // out: rgb + the moments' variance, the A-Trous input; written here rather than copied by
-    // the variance pass (one pass less over 4 planes), which revises only short histories.
-    PlaneSet filterInput;
-    float alpha, momentsAlpha, maxHistory;
     int hasHistory;
 
-    // Branch-free (every pixel computes every term; selects pick the outputs) so the CPU
-    // vectorises it across pixels.
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        const Layout& L = g.layout;
-        PixelIndex i = L.index(x, y);
+        PixelIndex i = g.layout.index(x, y);
         if constexpr (Search3x3) {
             if (validity[i] != kReprojectionOtherObject || g.objectId[i] < 0) return;
         }
-        Float3 current = radiance.load(i);
         auto taps = findHistory<Search3x3>(g, i, previous, objects, objectCount, derivatives, test,
                                            hasHistory);
         validity[i] = taps.code;
-        bool object = g.objectId[i] >= 0;
-        bool valid = taps.code == kReprojectionValid;
-        float l = luminance(current);
-
-        // The history (all weights 0 where invalid).
-        Float3 history;
+        Float3 rgb;
         float mean = 0.0f, h = 0.0f;
         Planes3 previousRgb = previousIllumination.rgb();
         RTD_UNROLL
         for (int t = 0; t < taps.kCount; ++t) {
             PixelIndex j = taps.index[t];
             float w = taps.weight[t];
-            history += previousRgb.load(j) * w;
+            rgb += previousRgb.load(j) * w;
             mean += previousMoments.at(0, j) * w;
             h += previousLength[j] * w;
         }
@@ -152,6 +140,44 @@ struct SvgfTemporal {
             variance += (previousMoments.at(1, j) + square(previousMoments.at(0, j) - mean)) *
                         taps.weight[t];
         }
+        history.rgb().store(i, rgb);
+        history.at(3, i) = mean;
+        history.at(4, i) = variance;
+        history.at(5, i) = h;
+    }
+};
+using SvgfReprojectKernel = SvgfReproject<false>;
+using SvgfReprojectSearchKernel = SvgfReproject<true>;
+
+// Accumulation: the reprojected history, clamped against lighting changes, blended with the
+// current frame; the luminance moments and the history length updated.
+struct SvgfAccumulateKernel {
+    GBufferView g;
+    Planes3 radiance;  // noisy input, demodulated by the ingest, after firefly removal
+    PlaneSet rowSums;  // ColorRowSumsKernel over `radiance`: the anti-lag clamp's window
+    int clampRadius;   // <= kNarrowWindow
+    float clampK;      // 0: no clamp (the paper); else history clamped to mu +- k sigma
+    PlaneSet history;  // SvgfReproject's output
+    const std::uint8_t* validity;
+    Planes3 illumination;  // out
+    PlaneSet moments;      // out, 2 planes: luminance mean, variance
+    float* length;         // out: frames of history, 1 after a disocclusion
+    // out: rgb + the moments' variance, the A-Trous input; written here rather than copied by
+    // the variance pass (one pass less over 4 planes), which revises only short histories.
+    PlaneSet filterInput;
+    float alpha, momentsAlpha, maxHistory;
+
+    // Branch-free (every pixel computes every term; selects pick the outputs) so the CPU
+    // vectorises it across pixels.
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const Layout& L = g.layout;
+        PixelIndex i = L.index(x, y);
+        Float3 current = radiance.load(i);
+        bool object = g.objectId[i] >= 0;
+        bool valid = validity[i] == kReprojectionValid;
+        float l = luminance(current);
+        Float3 previous = history.rgb().load(i);
+        float mean = history.at(3, i), variance = history.at(4, i), h = history.at(5, i);
         {
             // Anti-lag (clampK > 0): history outside what the current frame's neighbourhood
             // allows (a light switched, a shadow moved) is pulled into mu +- k sigma; ordinary
@@ -166,16 +192,17 @@ struct SvgfTemporal {
             // up within a frame or two: a cheap stand-in for A-SVGF's temporal gradients.
             float meanL = luminance(w.mean);
             float standardError = luminance(w.sigma) / std::sqrt(w.count);
-            float historyL = luminance(history);
+            float historyL = luminance(previous);
             float gap = maxf(
                 (historyL > meanL ? historyL - meanL : meanL - historyL) - 3.0f * standardError,
                 0.0f);
             float change = antiLag ? minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f) : 0.0f;
             h *= square(square(1.0f - change));
-            Float3 clamped = clamp3(history, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
-            history.x = antiLag ? clamped.x : history.x;
-            history.y = antiLag ? clamped.y : history.y;
-            history.z = antiLag ? clamped.z : history.z;
+            Float3 clamped =
+                clamp3(previous, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
+            previous.x = antiLag ? clamped.x : previous.x;
+            previous.y = antiLag ? clamped.y : previous.y;
+            previous.z = antiLag ? clamped.z : previous.z;
         }
         // A new history (disocclusion, first frame) starts at 1 frame: alpha 1, the current
         // sample alone. Background: passed through, no history.
@@ -183,7 +210,7 @@ struct SvgfTemporal {
         // Equal weights for the first frames of a history, then the exponential average.
         float a1 = maxf(alpha, 1.0f / h), a2 = maxf(momentsAlpha, 1.0f / h);
         float d = l - mean;
-        Float3 result = history * (1.0f - a1) + current * a1;
+        Float3 result = previous * (1.0f - a1) + current * a1;
         float newVariance = object ? (1.0f - a2) * (variance + a2 * d * d) : 0.0f;
         illumination.store(i, result);
         moments.at(0, i) = object ? mean + a2 * d : 0.0f;
@@ -193,8 +220,6 @@ struct SvgfTemporal {
         filterInput.at(3, i) = newVariance;
     }
 };
-using SvgfTemporalKernel = SvgfTemporal<false>;
-using SvgfTemporalSearchKernel = SvgfTemporal<true>;
 
 // Variance where fewer than `shortHistory` frames are accumulated: from the moments of a 7x7
 // edge-aware neighbourhood (which also filters the illumination), boosted by shortHistory / h
@@ -249,9 +274,9 @@ struct SvgfVariance {
             for (int side = 0; side < 2; ++side) {
                 PixelIndex j = side == 0 ? i + o : i - o;
                 Float3 cj = illumination.load(j);
-                float w = svgfTapMask(terms, id, g.objectId[j]) *
-                          svgfWeight<NormalSquarings>(terms, centre, depthScale, g.depth[j],
+                float w = svgfWeight<NormalSquarings>(terms, centre, depthScale, g.depth[j],
                                                       g.normal.load(j), luminance(cj));
+                w = svgfTapAccepted(terms, id, g.objectId[j]) ? w : 0.0f;
                 float shifted = moments.at(0, j) - centreMean;
                 sum += cj * w;
                 m1 += shifted * w;
@@ -325,9 +350,9 @@ struct SvgfAtrous {
             for (int side = 0; side < 2; ++side) {
                 PixelIndex j = side == 0 ? i + o : i - o;
                 Float3 cj = in.rgb().load(j);
-                float w = svgfTapMask(terms, id, g.objectId[j]) * k *
-                          svgfWeight<NormalSquarings>(terms, c, depthScale, g.depth[j],
+                float w = svgfWeight<NormalSquarings>(terms, c, depthScale, g.depth[j],
                                                       g.normal.load(j), luminance(cj));
+                w = svgfTapAccepted(terms, id, g.objectId[j]) ? k * w : 0.0f;
                 sum += cj * w;
                 sumVar += w * w * in.at(3, j);
                 sumW += w;
