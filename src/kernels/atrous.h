@@ -18,7 +18,8 @@ struct Atrous {
     // Branch-free body (border and background taps get weight 0) so the CPU launcher can
     // vectorise across neighbouring pixels: their taps are neighbours too (contiguous loads).
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        constexpr float kB3[5] = {0.0625f, 0.25f, 0.375f, 0.25f, 0.0625f};
+        // log2 of the B3 spline's taps 1/16, 1/4, 3/8, 1/4, 1/16.
+        constexpr float kLog2B3[5] = {-4.0f, -2.0f, -1.4150375f, -2.0f, -4.0f};
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 ci = in.load(i);
@@ -34,8 +35,9 @@ struct Atrous {
                 Float3 cj = in.load(j);
                 float exponent = edgeStoppingExponent<OppositeNormalsVanish>(
                     edges, ci, cj, ni, g.normal.load(j), pi, g.position.load(j));
-                float w = tapMask(edges, idI, g.objectId[j]) * (kB3[ty] * kB3[tx]) *
-                          expNegative(-exponent);
+                // The kernel value k = 2^log2k enters the exponent: no multiplication.
+                float w = exp2Negative((kLog2B3[ty] + kLog2B3[tx]) - exponent * kLog2e);
+                w = tapMask(edges, idI, g.objectId[j]) > 0.0f ? w : 0.0f;
                 sum += cj * w;
                 sumW += w;
             }

@@ -40,22 +40,25 @@ RTD_HOST_DEVICE RTD_INLINE float svgfDepthScale(const SvgfTerms& t, float depthA
     return divideApprox(kLog2e, t.sigmaDepth * slope + 1e-3f);
 }
 
-// The SVGF edge-stopping weight between a centre and a tap (before the tap mask and kernel):
-//   exp(-|dz| / (sigma_z |grad z . offset| + eps) - |dl| / phi_l) * max(0, n.n')^sigma_n
-// evaluated as 2^(-|dz| depthScale - |dl| luminanceScale) with both scales precomputed.
+// The SVGF edge-stopping weight between a centre and a tap (before the tap mask), times the
+// filter kernel's value k at the tap:
+//   k exp(-|dz| / (sigma_z |grad z . offset| + eps) - |dl| / phi_l) max(0, n.n')^sigma_n
+// evaluated as 2^(log2 k - |dz| depthScale - |dl| luminanceScale) with both scales precomputed
+// (k costs no multiplication there).
 // NormalSquarings < 0: any sigma_n, the normal factor folded into the exponent as
 // sigma_n log2(n.n'). NormalSquarings = k: sigma_n = 2^k (the paper's 128 is k = 7), the factor by
 // k squarings: the same value with no logarithm per tap (an A-Trous iteration ~25% faster).
 template <int NormalSquarings>
 RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre& c,
                                             float depthScale, float depthJ, Float3 normalJ,
-                                            float lumJ) {
+                                            float lumJ, float log2Kernel = 0.0f) {
     // Reassociated, clang turns the multiplication by the precomputed scales back into a vector
     // division per tap.
     RTD_NO_REASSOCIATION
     float dz = c.depth - depthJ;
     float dl = c.luminance - lumJ;
-    float e = (dz < 0 ? -dz : dz) * depthScale + (dl < 0 ? -dl : dl) * c.luminanceScale;
+    float e = ((dz < 0 ? -dz : dz) * depthScale - log2Kernel) +
+              (dl < 0 ? -dl : dl) * c.luminanceScale;
     float cosine = dot(c.normal, normalJ);
     if constexpr (NormalSquarings < 0) {
         // n.n' <= 0 gives sigma_n log2(1e-30): a weight of exactly 0.
@@ -234,7 +237,7 @@ struct SvgfVariance {
     Planes3 illumination;
     PlaneSet moments;
     const float* length;
-    PlaneSet out;  // rgb + variance (SvgfTemporal's filterInput), revised in place
+    PlaneSet out;  // rgb + variance (SvgfAccumulate's filterInput), revised in place
     SvgfTerms terms;
     float shortHistory;
     static constexpr int kRadius = kSvgfWindowRadius;  // unrolled
@@ -305,6 +308,7 @@ struct SvgfAtrous {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         constexpr float kB3[3] = {0.375f, 0.25f, 0.0625f};  // by |tap offset| / stride
+        constexpr float kLog2B3[3] = {-1.4150375f, -2.0f, -4.0f};  // log2 kB3: in the exponent
         constexpr float kGauss[2] = {0.25f, 0.125f};  // 3x3: 1/4 centre, 1/8 edges, 1/16 corners
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
@@ -343,7 +347,7 @@ struct SvgfAtrous {
         RTD_UNROLL
         for (int pair = 0; pair < 12; ++pair) {
             int ax = pair % 5 - 2, ay = pair / 5 - 2;  // the taps before the centre, raster order
-            float k = kB3[ax < 0 ? -ax : ax] * kB3[ay < 0 ? -ay : ay];
+            float log2Kernel = kLog2B3[ax < 0 ? -ax : ax] + kLog2B3[ay < 0 ? -ay : ay];
             float depthScale = svgfDepthScale(terms, stepX * float(ax) + stepY * float(ay));
             PixelIndex o = L.offset(ax * stride, ay * stride);
             RTD_UNROLL
@@ -351,8 +355,8 @@ struct SvgfAtrous {
                 PixelIndex j = side == 0 ? i + o : i - o;
                 Float3 cj = in.rgb().load(j);
                 float w = svgfWeight<NormalSquarings>(terms, c, depthScale, g.depth[j],
-                                                      g.normal.load(j), luminance(cj));
-                w = svgfTapAccepted(terms, id, g.objectId[j]) ? k * w : 0.0f;
+                                                      g.normal.load(j), luminance(cj), log2Kernel);
+                w = svgfTapAccepted(terms, id, g.objectId[j]) ? w : 0.0f;
                 sum += cj * w;
                 sumVar += w * w * in.at(3, j);
                 sumW += w;
