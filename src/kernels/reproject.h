@@ -40,10 +40,26 @@ struct PreviousGeometry {
 template <int Taps>
 struct HistoryTaps {
     static constexpr int kCount = Taps;
-    PixelIndex index[Taps];  // always inside the padded plane, even when unused
+    // Always inside the padded plane, even when unused. The 2x2 block's taps are in raster
+    // order, so index[1] = index[0] + 1 and index[3] = index[2] + 1 (loadTaps reads them in
+    // pairs).
+    PixelIndex index[Taps];
     float weight[Taps];
     std::uint8_t code;
 };
+
+// A plane's values at the taps. The 2x2 block: two pairs of neighbours (loadPair).
+template <int Taps, class T>
+RTD_HOST_DEVICE RTD_INLINE void loadTaps(const T* plane, const HistoryTaps<Taps>& taps,
+                                         T (&values)[Taps]) {
+    if constexpr (Taps == 4) {
+        loadPair(plane + taps.index[0], values[0], values[1]);
+        loadPair(plane + taps.index[2], values[2], values[3]);
+    } else {
+        RTD_UNROLL
+        for (int t = 0; t < Taps; ++t) values[t] = plane[taps.index[t]];
+    }
+}
 
 // Locates pixel i's history. `derivatives`: planes dz/dx, dz/dy, fwidth(n) of the current frame.
 // Search3x3: when all four bilinear taps fail the history test, average the 3x3 taps that pass.
@@ -89,18 +105,27 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     constexpr int kSide = Search3x3 ? 3 : 2;
 
     HistoryTaps<kTaps> taps;
+    RTD_UNROLL
+    for (int t = 0; t < kTaps; ++t) taps.index[t] = L.index(firstX + t % kSide, firstY + t / kSide);
+    // The previous frame's geometry at the taps (off the screen: the border, object ID -1, which
+    // the ID test rejects).
+    std::int32_t previousId[kTaps];
+    float previousDepth[kTaps], previousNx[kTaps], previousNy[kTaps], previousNz[kTaps];
+    loadTaps(previous.objectId, taps, previousId);
+    loadTaps(previous.depth, taps, previousDepth);
+    loadTaps(previous.normal.data, taps, previousNx);
+    loadTaps(previous.normal.data + previous.normal.planeSize, taps, previousNy);
+    loadTaps(previous.normal.data + 2 * previous.normal.planeSize, taps, previousNz);
     bool accepted[kTaps];
     float bilinearSum = 0.0f, acceptedCount = 0.0f;
     RTD_UNROLL
     for (int t = 0; t < kTaps; ++t) {
         int tx = firstX + t % kSide, ty = firstY + t / kSide;
-        // Taps off the screen lie in the border (object ID -1): rejected by the ID test.
-        PixelIndex j = L.index(tx, ty);
-        bool ok = acceptHistory(test, id, previous.objectId[j], s.w, previous.depth[j], fwidthDepth,
-                                expectedNormal, previous.normal.load(j), fwidthNormal);
+        bool ok = acceptHistory(test, id, previousId[t], s.w, previousDepth[t], fwidthDepth,
+                                expectedNormal, make3(previousNx[t], previousNy[t], previousNz[t]),
+                                fwidthNormal);
         float wx = tx == x0 ? 1.0f - fx : tx == x0 + 1 ? fx : 0.0f;
         float wy = ty == y0 ? 1.0f - fy : ty == y0 + 1 ? fy : 0.0f;
-        taps.index[t] = j;
         accepted[t] = ok;
         taps.weight[t] = ok ? wx * wy : 0.0f;
         bilinearSum += taps.weight[t];
@@ -177,9 +202,14 @@ struct ReprojectKernel {
         PixelIndex i = g.layout.index(x, y);
         auto taps =
             findHistory<false>(g, i, previous, objects, objectCount, derivatives, test, hasHistory);
+        constexpr int kTaps = decltype(taps)::kCount;
+        float r[kTaps], gr[kTaps], b[kTaps];
+        loadTaps(history.data, taps, r);
+        loadTaps(history.data + history.planeSize, taps, gr);
+        loadTaps(history.data + 2 * history.planeSize, taps, b);
         Float3 sum;  // 0 where invalid: every weight is 0
         RTD_UNROLL
-        for (int t = 0; t < taps.kCount; ++t) sum += history.load(taps.index[t]) * taps.weight[t];
+        for (int t = 0; t < kTaps; ++t) sum += make3(r[t], gr[t], b[t]) * taps.weight[t];
         reprojected.store(i, sum);
         validity[i] = taps.code;
     }

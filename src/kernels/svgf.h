@@ -124,25 +124,28 @@ struct SvgfReproject {
         auto taps = findHistory<Search3x3>(g, i, previous, objects, objectCount, derivatives, test,
                                            hasHistory);
         validity[i] = taps.code;
+        constexpr int kTaps = decltype(taps)::kCount;
+        float r[kTaps], gr[kTaps], b[kTaps], means[kTaps], variances[kTaps], lengths[kTaps];
+        loadTaps(previousIllumination.data, taps, r);
+        loadTaps(&previousIllumination.at(1, 0), taps, gr);
+        loadTaps(&previousIllumination.at(2, 0), taps, b);
+        loadTaps(previousMoments.data, taps, means);
+        loadTaps(&previousMoments.at(1, 0), taps, variances);
+        loadTaps(previousLength, taps, lengths);
         Float3 rgb;
         float mean = 0.0f, h = 0.0f;
-        Planes3 previousRgb = previousIllumination.rgb();
         RTD_UNROLL
-        for (int t = 0; t < taps.kCount; ++t) {
-            PixelIndex j = taps.index[t];
+        for (int t = 0; t < kTaps; ++t) {
             float w = taps.weight[t];
-            rgb += previousRgb.load(j) * w;
-            mean += previousMoments.at(0, j) * w;
-            h += previousLength[j] * w;
+            rgb += make3(r[t], gr[t], b[t]) * w;
+            mean += means[t] * w;
+            h += lengths[t] * w;
         }
         // The taps' mixture: its variance is their mean variance plus the spread of their means.
         float variance = 0.0f;
         RTD_UNROLL
-        for (int t = 0; t < taps.kCount; ++t) {
-            PixelIndex j = taps.index[t];
-            variance += (previousMoments.at(1, j) + square(previousMoments.at(0, j) - mean)) *
-                        taps.weight[t];
-        }
+        for (int t = 0; t < kTaps; ++t)
+            variance += (variances[t] + square(means[t] - mean)) * taps.weight[t];
         history.rgb().store(i, rgb);
         history.at(3, i) = mean;
         history.at(4, i) = variance;

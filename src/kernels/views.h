@@ -66,6 +66,25 @@ struct GBufferView {
     const std::int32_t* objectId = nullptr;  // -1: background and border
 };
 
+// The values at p[0] and p[1] (neighbouring pixels of a plane) at a data-dependent address. On
+// the CPU one 8-byte load, which the vectoriser turns into one 64-bit gather for both: the
+// bilinear history taps come in such pairs, and gathers cost per element fetched. On the GPU two
+// loads (an 8-byte one would need 8-byte alignment).
+template <class T>
+RTD_HOST_DEVICE RTD_INLINE void loadPair(const T* p, T& first, T& second) {
+    static_assert(sizeof(T) == 4, "pairs of 32-bit values");
+#if defined(__CUDA_ARCH__)
+    first = p[0];
+    second = p[1];
+#else
+    std::uint64_t bits;
+    std::memcpy(&bits, p, sizeof bits);
+    auto low = std::uint32_t(bits), high = std::uint32_t(bits >> 32);  // x86: little-endian
+    std::memcpy(&first, &low, sizeof first);
+    std::memcpy(&second, &high, sizeof second);
+#endif
+}
+
 // 1 for a pixel that holds an object, 0 for background or border (a multiplier, not a branch).
 RTD_HOST_DEVICE RTD_INLINE float foregroundMask(std::int32_t id) {
     return id >= 0 ? 1.0f : 0.0f;
