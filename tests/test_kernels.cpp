@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "devices/cpu/parallel_for.h"
 #include "kernel_harness.h"
 
 namespace rtd {
@@ -20,6 +21,19 @@ TEST(FastMath, ExpMatchesStdExpOverTheFilterRange) {
     EXPECT_EQ(expNegative(0.0f), 1.0f);
     EXPECT_FALSE(std::isnan(expNegative(-1e4f)));  // no NaN for huge exponents
     EXPECT_LT(expNegative(-1e4f), 1e-37f);
+}
+
+TEST(FastMath, Exp2AndLog2MatchTheStandardLibrary) {
+    for (float t = -120.0f; t <= 0.0f; t += 0.0173f) {
+        float expected = std::exp2(t);
+        EXPECT_NEAR(exp2Negative(t), expected, 2e-7f * expected) << "t = " << t;
+    }
+    EXPECT_EQ(exp2Negative(0.0f), 1.0f);  // the centre tap's weight
+    EXPECT_EQ(exp2Negative(-3.0f), 0.125f);
+    for (float x = 1e-30f; x < 1e30f; x *= 1.37f)
+        EXPECT_NEAR(log2Positive(x), std::log2(x), 4e-7f * std::max(1.0f, std::fabs(std::log2(x))))
+            << "x = " << x;
+    EXPECT_EQ(log2Positive(1.0f), 0.0f);
 }
 
 TEST(FastMath, AcosMatchesStdAcos) {
@@ -209,6 +223,31 @@ TEST(WindowSums, SeparableStatisticsEqualTheDirectWindow) {
     expectSeparableSumsEqualDirect<kNarrowWindow>(3);
     expectSeparableSumsEqualDirect<kWideWindow>(5);
     expectSeparableSumsEqualDirect<kWideWindow>(15);
+}
+
+// The CPU launcher's block-sparse mode: a kernel with active() has its body run on the runs of
+// kSparseBlock pixels of a row that hold an active pixel, and on no other.
+struct MarkVisited {
+    int width;
+    std::uint8_t* visited;
+    const std::uint8_t* activeMask;
+    bool active(int x, int y) const { return activeMask[y * width + x] != 0; }
+    void operator()(int x, int y) const { visited[y * width + x] = 1; }
+};
+
+TEST(CpuLauncher, BlockSparseKernelsRunOnlyOnRunsWithAnActivePixel) {
+    const int w = 70, h = 9;  // 70 = 4 runs of 16 and a short one
+    std::vector<std::uint8_t> visited(w * h, 0), activeMask(w * h, 0);
+    activeMask[5 * w + 3] = 1;   // row 5, run [0, 16)
+    activeMask[7 * w + 47] = 1;  // row 7, run [32, 48)
+    activeMask[7 * w + 69] = 1;  // row 7, the short run [64, 70)
+    static_assert(BlockSparse<MarkVisited>);
+    parallelFor2D(w, h, MarkVisited{w, visited.data(), activeMask.data()});
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            bool expected = (y == 5 && x < 16) || (y == 7 && ((x >= 32 && x < 48) || x >= 64));
+            EXPECT_EQ(visited[std::size_t(y * w + x)], expected ? 1 : 0) << x << ", " << y;
+        }
 }
 
 }  // namespace

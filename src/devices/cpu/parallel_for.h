@@ -4,6 +4,8 @@
 
 #include <concepts>
 
+#include "core/host_device.h"
+
 #if defined(__SSE__)
 #include <xmmintrin.h>
 #endif
