@@ -78,8 +78,13 @@ void parallelFor2D(int width, int height, const Kernel& kernel) {
 #pragma omp parallel
     {
         flushDenormalsToZero();
+        // A private copy, whose address never escapes: its fields (pointers, sizes) are then
+        // known not to change when the kernel stores through a pointer. Read through the
+        // reference, any int or byte store (object IDs, validity codes) might overwrite them, so
+        // the compiler reloaded them per pixel and wrote the planes with scatters.
+        const Kernel local = kernel;
 #pragma omp for schedule(dynamic, 4)
-        for (int y = 0; y < height; ++y) runRow(kernel, 0, width, y);
+        for (int y = 0; y < height; ++y) runRow(local, 0, width, y);
     }
 }
 
