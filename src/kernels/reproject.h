@@ -164,11 +164,16 @@ struct GeometryDerivativesKernel {
     }
     RTD_HOST_DEVICE RTD_INLINE float normalChange(PixelIndex i, PixelIndex step) const {
         std::int32_t id = g.objectId[i];
-        PixelIndex j = g.objectId[i + step] == id   ? i + step
-                       : g.objectId[i - step] == id ? i - step
-                                                    : i;
-        Float3 d = g.normal.load(j) - g.normal.load(i);
-        return std::sqrt(dot(d, d));
+        bool after = g.objectId[i + step] == id, before = g.objectId[i - step] == id;
+        // Selects between loaded neighbours, not a chosen index: the CPU then loads contiguous
+        // vectors rather than gathering.
+        Float3 n = g.normal.load(i), nAfter = g.normal.load(i + step),
+               nBefore = g.normal.load(i - step);
+        Float3 dAfter = nAfter - n, dBefore = nBefore - n;
+        float dx = after ? dAfter.x : before ? dBefore.x : 0.0f;
+        float dy = after ? dAfter.y : before ? dBefore.y : 0.0f;
+        float dz = after ? dAfter.z : before ? dBefore.z : 0.0f;
+        return std::sqrt(dx * dx + dy * dy + dz * dz);
     }
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
