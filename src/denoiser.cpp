@@ -370,8 +370,8 @@ struct Denoiser::Impl {
             });
         }
         std::vector<std::string> reprojectInputs = {
-            "position",    "normal",  "depth",         "objectId", "derivatives", "previous geometry",
-            "feedback",    "moments", "historyLength", "matrices"};
+            "position",          "normal",   "depth",   "objectId",      "derivatives",
+            "previous geometry", "feedback", "moments", "historyLength", "matrices"};
         addPass("svgf-reproject", reprojectInputs, {"history", "validity"},
                 [this] { launchSvgfReproject<SvgfReprojectKernel>(); });
         // The pixels whose bilinear taps all failed, again with the 3x3 search (few: sparse).
@@ -387,7 +387,7 @@ struct Denoiser::Impl {
                         planeSet(moments[current]), historyLength[current].data(),
                         planeSet(varianceOut), sv.alpha, sv.momentsAlpha, float(sv.maxHistory)});
                 });
-        // Short histories only (sparse): the temporal passes wrote the rest.
+        // Short histories only (block-sparse): the accumulation wrote the rest.
         addPass(
             "svgf-variance",
             {"illumination", "moments", "historyLength", "derivatives", "illumination+variance"},

@@ -135,15 +135,15 @@ TEST(SvgfKernels, AccumulatedIlluminationVarianceFallsAsOneOverN) {
         h.device->launch(
             SvgfReprojectKernel{h.gbuffer(), previous, &identity, 1, h.planeSet(derivatives),
                                 HistoryTest{1, 10.0f, 16.0f}, h.planeSet(illumination[prev]),
-                                h.planeSet(moments[prev]), length[prev].data(),
-                                h.planeSet(history), h.validity.data(), n > 1 ? 1 : 0},
+                                h.planeSet(moments[prev]), length[prev].data(), h.planeSet(history),
+                                h.validity.data(), n > 1 ? 1 : 0},
             w, hgt);
-        h.device->launch(SvgfAccumulateKernel{h.gbuffer(), h.planes(h.a), h.sumPlanes(), 3, 0.0f,
-                                              h.planeSet(history), h.validity.data(),
-                                              h.planes(illumination[cur]),
-                                              h.planeSet(moments[cur]), length[cur].data(),
-                                              h.planeSet(filterInput), 0.0f, 0.0f, 32.0f},
-                         w, hgt);
+        h.device->launch(
+            SvgfAccumulateKernel{h.gbuffer(), h.planes(h.a), h.sumPlanes(), 3, 0.0f,
+                                 h.planeSet(history), h.validity.data(),
+                                 h.planes(illumination[cur]), h.planeSet(moments[cur]),
+                                 length[cur].data(), h.planeSet(filterInput), 0.0f, 0.0f, 32.0f},
+            w, hgt);
         double sum = 0, sum2 = 0, varianceEstimate = 0;
         for (int y = 0; y < hgt; ++y)
             for (int x = 0; x < w; ++x) {

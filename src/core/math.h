@@ -133,15 +133,6 @@ RTD_HOST_DEVICE RTD_INLINE float log2Positive(float x) {
 #endif
 }
 
-// ln(x) for normal x > 0.
-RTD_HOST_DEVICE RTD_INLINE float logPositive(float x) {
-#if defined(__CUDA_ARCH__)
-    return __logf(x);
-#else
-    return log2Positive(x) * 0.693147181f;
-#endif
-}
-
 // a / b and sqrt(x) inside the filters' weights, where a few ulp do not matter: the GPU's
 // approximate instructions (2 ulp, no IEEE slow path); the CPU's vector division and square root
 // are already fast. Only here: nvcc's whole-file -prec-div=false -prec-sqrt=false -ftz=true made

@@ -57,8 +57,8 @@ RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre
     RTD_NO_REASSOCIATION
     float dz = c.depth - depthJ;
     float dl = c.luminance - lumJ;
-    float e = ((dz < 0 ? -dz : dz) * depthScale - log2Kernel) +
-              (dl < 0 ? -dl : dl) * c.luminanceScale;
+    float e =
+        ((dz < 0 ? -dz : dz) * depthScale - log2Kernel) + (dl < 0 ? -dl : dl) * c.luminanceScale;
     float cosine = dot(c.normal, normalJ);
     if constexpr (NormalSquarings < 0) {
         // n.n' <= 0 gives sigma_n log2(1e-30): a weight of exactly 0.
@@ -91,7 +91,7 @@ RTD_HOST_DEVICE RTD_INLINE bool svgfTapAccepted(const SvgfTerms& t, std::int32_t
 // (sparse), then accumulation (every pixel). The split keeps the gathers at data-dependent
 // addresses in a kernel of their own: the accumulation, with its 7x7 window statistics, then
 // vectorises at the full width on the CPU (one kernel doing both ran at half width, spilling).
-// The history goes from the first to the last in SvgfHistory's 6 planes.
+// The reprojection hands the history to the accumulation in kSvgfHistoryPlanes planes.
 constexpr int kSvgfHistoryPlanes = 6;  // rgb, luminance mean, luminance variance, length
 
 // Reprojection: the previous frame's illumination, moments and history length sampled at each
@@ -204,8 +204,7 @@ struct SvgfAccumulateKernel {
                 0.0f);
             float change = antiLag ? minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f) : 0.0f;
             h *= square(square(1.0f - change));
-            Float3 clamped =
-                clamp3(previous, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
+            Float3 clamped = clamp3(previous, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
             previous.x = antiLag ? clamped.x : previous.x;
             previous.y = antiLag ? clamped.y : previous.y;
             previous.z = antiLag ? clamped.z : previous.z;
@@ -229,7 +228,7 @@ struct SvgfAccumulateKernel {
 
 // Variance where fewer than `shortHistory` frames are accumulated: from the moments of a 7x7
 // edge-aware neighbourhood (which also filters the illumination), boosted by shortHistory / h
-// for the first frames as in the paper. Elsewhere the temporal pass's output (the moments'
+// for the first frames as in the paper. Elsewhere the accumulation's output (the moments'
 // variance) stands. Block-sparse (active()): after the first frames few pixels have a short
 // history, and those lie together (disocclusions), so the CPU launcher runs the vectorised body
 // only on runs of pixels with at least one active.
@@ -310,7 +309,7 @@ struct SvgfAtrous {
     SvgfTerms terms;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        constexpr float kB3[3] = {0.375f, 0.25f, 0.0625f};  // by |tap offset| / stride
+        constexpr float kB3[3] = {0.375f, 0.25f, 0.0625f};         // by |tap offset| / stride
         constexpr float kLog2B3[3] = {-1.4150375f, -2.0f, -4.0f};  // log2 kB3: in the exponent
         constexpr float kGauss[2] = {0.25f, 0.125f};  // 3x3: 1/4 centre, 1/8 edges, 1/16 corners
         const Layout& L = g.layout;
@@ -334,10 +333,10 @@ struct SvgfAtrous {
                 prefiltered += m * in.at(3, j);
                 prefilterW += m;
             }
-        SvgfCentre c{g.depth[i], g.normal.load(i), luminance(cI),
-                     kLog2e / (terms.sigmaLuminance *
-                                   std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) +
-                               1e-10f)};
+        SvgfCentre c{
+            g.depth[i], g.normal.load(i), luminance(cI),
+            kLog2e /
+                (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f)};
         // The depth change over one tap step.
         float stepX = derivatives.at(0, i) * float(stride);
         float stepY = derivatives.at(1, i) * float(stride);

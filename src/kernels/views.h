@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
+#include <utility>
 
 #include "core/math.h"
 
@@ -79,7 +81,10 @@ RTD_HOST_DEVICE RTD_INLINE void loadPair(const T* p, T& first, T& second) {
 #else
     std::uint64_t bits;
     std::memcpy(&bits, p, sizeof bits);
-    auto low = std::uint32_t(bits), high = std::uint32_t(bits >> 32);  // x86: little-endian
+    auto low = std::uint32_t(bits), high = std::uint32_t(bits >> 32);
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+    std::swap(low, high);  // p[0] is then the high half
+#endif
     std::memcpy(&first, &low, sizeof first);
     std::memcpy(&second, &high, sizeof second);
 #endif
