@@ -250,5 +250,44 @@ TEST(CpuLauncher, BlockSparseKernelsRunOnlyOnRunsWithAnActivePixel) {
         }
 }
 
+// The launcher's interleaved row order (wide A-Trous strides): a permutation of the rows in
+// which rows of one class (equal y mod stride) come one after another, stride apart.
+TEST(CpuLauncher, InterleavedRowsVisitEveryRowOnceClassByClass) {
+    for (int height : {1, 7, 64, 1080, 1081}) {
+        for (int stride : {2, 3, 8, 16}) {
+            if (stride >= height) continue;
+            std::vector<int> seen(std::size_t(height), 0);
+            int previous = -1;
+            for (int k = 0; k < height; ++k) {
+                int y = interleavedRow(k, height, stride);
+                ASSERT_GE(y, 0);
+                ASSERT_LT(y, height);
+                ++seen[std::size_t(y)];
+                if (previous >= 0 && previous % stride == y % stride)
+                    EXPECT_EQ(y, previous + stride) << height << ", " << stride << ", k " << k;
+                else if (previous >= 0)
+                    EXPECT_EQ(y % stride, previous % stride + 1) << "classes in order";
+                previous = y;
+            }
+            for (int y = 0; y < height; ++y) EXPECT_EQ(seen[std::size_t(y)], 1) << y;
+        }
+    }
+}
+
+struct CountVisits {
+    int width, stride;
+    int* visits;
+    int tapRowStride() const { return stride; }
+    void operator()(int x, int y) const { visits[y * width + x] += 1; }
+};
+
+TEST(CpuLauncher, StridedKernelsVisitEveryPixelOnce) {
+    const int w = 4096, h = 40, stride = 16;  // wide enough to interleave (interleaveRows)
+    ASSERT_TRUE(interleaveRows(stride, w));
+    std::vector<int> visits(std::size_t(w) * h, 0);
+    parallelFor2D(w, h, CountVisits{w, stride, visits.data()});
+    for (std::size_t i = 0; i < visits.size(); ++i) ASSERT_EQ(visits[i], 1) << i;
+}
+
 }  // namespace
 }  // namespace rtd

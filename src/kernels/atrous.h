@@ -14,6 +14,8 @@ struct Atrous {
     Planes3 in, out;
     int stride;  // 2 * stride <= layout.padding
     EdgeStoppingTerms edges;
+    // The rows it reads are `stride` apart (the CPU launcher's row order, parallel_for.h).
+    RTD_HOST_DEVICE int tapRowStride() const { return stride; }
 
     // Branch-free body (border and background taps get weight 0) so the CPU launcher can
     // vectorise across neighbouring pixels: their taps are neighbours too (contiguous loads).

@@ -307,6 +307,8 @@ struct SvgfAtrous {
     PlaneSet in, out;  // rgb + variance
     int stride;
     SvgfTerms terms;
+    // The rows it reads are `stride` apart (the CPU launcher's row order, parallel_for.h).
+    RTD_HOST_DEVICE int tapRowStride() const { return stride; }
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         constexpr float kB3[3] = {0.375f, 0.25f, 0.0625f};         // by |tap offset| / stride
