@@ -101,12 +101,24 @@ inline int interleavedRow(int k, int height, int stride) {
     return longClasses + k / perClass + (k % perClass) * stride;
 }
 
+// Rows in classes of equal y mod stride, shared out to the cores in that order.
+template <class Kernel>
+void parallelFor2DInterleaved(int width, int height, int stride, const Kernel& kernel) {
+#pragma omp parallel
+    {
+        flushDenormalsToZero();
+        const Kernel local = kernel;  // as in parallelFor2D
+#pragma omp for schedule(dynamic, 4)
+        for (int k = 0; k < height; ++k) runRow(local, 0, width, interleavedRow(k, height, stride));
+    }
+}
+
 template <class Kernel>
 void parallelFor2D(int width, int height, const Kernel& kernel) {
-    int stride = 1;
     if constexpr (TapRowStrided<Kernel>) {
-        int s = kernel.tapRowStride();
-        if (s > 1 && s < height && interleaveRows(s, width)) stride = s;
+        int stride = kernel.tapRowStride();
+        if (stride > 1 && stride < height && interleaveRows(stride, width))
+            return parallelFor2DInterleaved(width, height, stride, kernel);
     }
 #pragma omp parallel
     {
@@ -117,8 +129,7 @@ void parallelFor2D(int width, int height, const Kernel& kernel) {
         // the compiler reloaded them per pixel and wrote the planes with scatters.
         const Kernel local = kernel;
 #pragma omp for schedule(dynamic, 4)
-        for (int k = 0; k < height; ++k)
-            runRow(local, 0, width, stride == 1 ? k : interleavedRow(k, height, stride));
+        for (int y = 0; y < height; ++y) runRow(local, 0, width, y);
     }
 }
 
