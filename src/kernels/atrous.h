@@ -27,6 +27,8 @@ struct Atrous {
         Float3 ci = in.load(i);
         Float3 ni = g.normal.load(i), pi = g.position.load(i);
         std::int32_t idI = g.objectId[i];
+        // Taps from the centre's object, or any object (a background centre's result is unused).
+        AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
         Float3 sum;
         float sumW = 0.0f;
         RTD_UNROLL
@@ -39,7 +41,7 @@ struct Atrous {
                     edges, ci, cj, ni, g.normal.load(j), pi, g.position.load(j));
                 // The kernel value k = 2^log2k enters the exponent: no multiplication.
                 float w = exp2Negative((kLog2B3[ty] + kLog2B3[tx]) - exponent * kLog2e);
-                w = tapMask(edges, idI, g.objectId[j]) > 0.0f ? w : 0.0f;
+                w = accepted.contains(g.objectId[j]) ? w : 0.0f;
                 sum += cj * w;
                 sumW += w;
             }

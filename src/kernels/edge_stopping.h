@@ -16,15 +16,6 @@ struct EdgeStoppingTerms {
     int separateObjects;  // 1: taps on another object ID get weight 0
 };
 
-// 1 if tap j may contribute to centre i: it holds an object (not background, not the border)
-// and, when objects are kept apart, the same one.
-RTD_HOST_DEVICE RTD_INLINE float tapMask(const EdgeStoppingTerms& t, std::int32_t centreId,
-                                         std::int32_t tapId) {
-    bool sameObject = tapId == centreId;
-    bool anyObject = tapId >= 0;
-    return (t.separateObjects ? sameObject : anyObject) ? 1.0f : 0.0f;
-}
-
 // True when normals more than 90 degrees apart weigh nothing at float precision:
 // (pi/2)^2 / 2sn^2 >= 88 (sigma_normal <= 0.118, the assignment's 0.1 included) makes their
 // weight e^-88 or less, under 2^-126.

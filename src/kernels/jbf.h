@@ -27,6 +27,7 @@ struct Jbf {
         }
         Float3 ni = g.normal.load(i), pi = g.position.load(i);
         std::int32_t idI = g.objectId[i];
+        AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
         float sumR = 0.0f, sumG = 0.0f, sumB = 0.0f, sumW = 0.0f;
         for (int dy = -radius; dy <= radius; ++dy) {
             PixelIndex row = i + L.offset(0, dy);
@@ -39,7 +40,7 @@ struct Jbf {
                 float exponent = (float(dx * dx) + dy2) * coordScale +
                                  edgeStoppingExponent<OppositeNormalsVanish>(
                                      edges, ci, cj, ni, g.normal.load(j), pi, g.position.load(j));
-                float w = tapMask(edges, idI, g.objectId[j]) * expNegative(-exponent);
+                float w = accepted.contains(g.objectId[j]) ? expNegative(-exponent) : 0.0f;
                 sumR += w * cj.x;
                 sumG += w * cj.y;
                 sumB += w * cj.z;

@@ -82,11 +82,6 @@ RTD_HOST_DEVICE RTD_INLINE bool normalFactorBySquarings(const SvgfTerms& t) {
     return t.sigmaNormal == 128.0f;
 }
 
-RTD_HOST_DEVICE RTD_INLINE bool svgfTapAccepted(const SvgfTerms& t, std::int32_t centreId,
-                                                std::int32_t tapId) {
-    return t.separateObjects ? tapId == centreId : tapId >= 0;
-}
-
 // The temporal stage is three passes: reprojection (every pixel, bilinear taps), its 3x3 search
 // (sparse), then accumulation (every pixel). The split keeps the gathers at data-dependent
 // addresses in a kernel of their own: the accumulation, with its 7x7 window statistics, then
@@ -259,6 +254,7 @@ struct SvgfVariance {
         Float3 c = illumination.load(i);
         std::int32_t id = g.objectId[i];
         float h = length[i];
+        AcceptedIds accepted = acceptedIds(terms.separateObjects, id);
         float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
         // No variance yet: phi_l = sigma_l.
         SvgfCentre centre{g.depth[i], g.normal.load(i), luminance(c),
@@ -281,7 +277,7 @@ struct SvgfVariance {
                 Float3 cj = illumination.load(j);
                 float w = svgfWeight<NormalSquarings>(terms, centre, depthScale, g.depth[j],
                                                       g.normal.load(j), luminance(cj));
-                w = svgfTapAccepted(terms, id, g.objectId[j]) ? w : 0.0f;
+                w = accepted.contains(g.objectId[j]) ? w : 0.0f;
                 float shifted = moments.at(0, j) - centreMean;
                 sum += cj * w;
                 m1 += shifted * w;
@@ -324,6 +320,7 @@ struct SvgfAtrous {
             out.at(3, i) = varianceI;
             return;
         }
+        AcceptedIds accepted = acceptedIds(terms.separateObjects, id);
         float prefiltered = 0.0f, prefilterW = 0.0f;
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
@@ -360,7 +357,7 @@ struct SvgfAtrous {
                 Float3 cj = in.rgb().load(j);
                 float w = svgfWeight<NormalSquarings>(terms, c, depthScale, g.depth[j],
                                                       g.normal.load(j), luminance(cj), log2Kernel);
-                w = svgfTapAccepted(terms, id, g.objectId[j]) ? w : 0.0f;
+                w = accepted.contains(g.objectId[j]) ? w : 0.0f;
                 sum += cj * w;
                 sumVar += w * w * in.at(3, j);
                 sumW += w;
