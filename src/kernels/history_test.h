@@ -20,12 +20,13 @@ RTD_HOST_DEVICE RTD_INLINE bool acceptHistory(const HistoryTest& t, std::int32_t
                                               float previousDepth, float fwidthDepth,
                                               Float3 expectedNormal, Float3 previousNormal,
                                               float fwidthNormal) {
-    if (previousId != id) return false;
-    if (!t.geometry) return true;
+    // Every term evaluated and combined with & and |, not early returns: no branch on the
+    // setting (or per tap) inside the CPU's vectorised pixel loop.
     float dz = expectedDepth - previousDepth;
-    if ((dz < 0 ? -dz : dz) > t.depthTolerance * (fwidthDepth + 0.01f)) return false;
+    bool depthOk = (dz < 0 ? -dz : dz) <= t.depthTolerance * (fwidthDepth + 0.01f);
     Float3 dn = expectedNormal - previousNormal;
-    return dot(dn, dn) <= square(t.normalTolerance * (fwidthNormal + 0.01f));
+    bool normalOk = dot(dn, dn) <= square(t.normalTolerance * (fwidthNormal + 0.01f));
+    return (previousId == id) & (!t.geometry | (depthOk & normalOk));
 }
 
 }  // namespace rtd
