@@ -40,7 +40,8 @@ struct Jbf {
                 float exponent = (float(dx * dx) + dy2) * coordScale +
                                  edgeStoppingExponent<OppositeNormalsVanish>(
                                      edges, ci, cj, ni, g.normal.load(j), pi, g.position.load(j));
-                float w = accepted.contains(g.objectId[j]) ? expNegative(-exponent) : 0.0f;
+                float w = expNegative(-exponent);  // then selected: no branch around it
+                w = accepted.contains(g.objectId[j]) ? w : 0.0f;
                 sumR += w * cj.x;
                 sumG += w * cj.y;
                 sumB += w * cj.z;

@@ -90,19 +90,18 @@ RTD_HOST_DEVICE RTD_INLINE void loadPair(const T* p, T& first, T& second) {
 #endif
 }
 
-// The object IDs a centre pixel takes taps from, as one range [first, first + count): its own
-// ID when objects are kept apart, else any object (ID >= 0). One unsigned comparison per tap and
-// no branch on the setting inside a filter's tap loop (with one, the CPU's unrolled 5x5 loops
-// split into blocks and spilled more: the SVGF A-Trous ran 8-11 % slower).
+// The object IDs a centre pixel takes taps from, as one range [first, last]: its own ID when
+// objects are kept apart, else any object (ID >= 0). Two comparisons per tap and no branch on the
+// setting inside a filter's tap loop (with one, the CPU's unrolled 5x5 loops split into blocks and
+// spilled more: the SVGF A-Trous ran 8-11 % slower).
 struct AcceptedIds {
-    std::int32_t first;
-    std::uint32_t count;
+    std::int32_t first, last;
     RTD_HOST_DEVICE RTD_INLINE bool contains(std::int32_t id) const {
-        return std::uint32_t(id) - std::uint32_t(first) < count;  // below `first`: wraps, large
+        return (id >= first) & (id <= last);
     }
 };
 RTD_HOST_DEVICE RTD_INLINE AcceptedIds acceptedIds(int separateObjects, std::int32_t centreId) {
-    return separateObjects ? AcceptedIds{centreId, 1u} : AcceptedIds{0, 0x80000000u};
+    return separateObjects ? AcceptedIds{centreId, centreId} : AcceptedIds{0, 0x7fffffff};
 }
 
 // 1 for a pixel that holds an object, 0 for background or border (a multiplier, not a branch).
