@@ -29,22 +29,35 @@ struct Atrous {
         std::int32_t idI = g.objectId[i];
         // Taps from the centre's object, or any object (a background centre's result is unused).
         AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
-        Float3 sum;
-        float sumW = 0.0f;
+        // The centre: all distances 0 but the normal's (n.n rounds to 1 - a few ulp), weight
+        // 2^log2k exp(-D_normal^2 / 2sn^2).
+        float centreW = exp2Negative(2.0f * kLog2B3[2] -
+                                     normalAngleSquared<OppositeNormalsVanish>(dot(ni, ni)) *
+                                         edges.normalScale * kLog2e);
+        Float3 sum = ci * centreW;
+        float sumW = centreW;
+        // The other 24 taps as 12 pairs at +offset and -offset, which share their kernel value
+        // and one division for their plane terms.
         RTD_UNROLL
-        for (int ty = 0; ty < 5; ++ty) {
-            RTD_UNROLL
-            for (int tx = 0; tx < 5; ++tx) {
-                PixelIndex j = i + L.offset((tx - 2) * stride, (ty - 2) * stride);
-                Float3 cj = in.load(j);
-                float exponent = edgeStoppingExponent<OppositeNormalsVanish>(
-                    edges, ci, cj, ni, g.normal.load(j), pi, g.position.load(j));
-                // The kernel value k = 2^log2k enters the exponent: no multiplication.
-                float w = exp2Negative((kLog2B3[ty] + kLog2B3[tx]) - exponent * kLog2e);
-                w = accepted.contains(g.objectId[j]) ? w : 0.0f;
-                sum += cj * w;
-                sumW += w;
-            }
+        for (int pair = 0; pair < 12; ++pair) {
+            int tx = pair % 5, ty = pair / 5;  // the taps before the centre, raster order
+            PixelIndex o = L.offset((tx - 2) * stride, (ty - 2) * stride);
+            PixelIndex ja = i + o, jb = i - o;
+            Float3 ca = in.load(ja), cb = in.load(jb);
+            EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(
+                edges, ci, ca, ni, g.normal.load(ja), pi, g.position.load(ja));
+            EdgeStoppingParts b = edgeStoppingParts<OppositeNormalsVanish>(
+                edges, ci, cb, ni, g.normal.load(jb), pi, g.position.load(jb));
+            float exponentA, exponentB;
+            pairExponents(a, b, exponentA, exponentB);
+            // The kernel value k = 2^log2k enters the exponent: no multiplication.
+            float log2Kernel = kLog2B3[ty] + kLog2B3[tx];
+            float wa = exp2Negative(log2Kernel - exponentA * kLog2e);
+            float wb = exp2Negative(log2Kernel - exponentB * kLog2e);
+            wa = accepted.contains(g.objectId[ja]) ? wa : 0.0f;
+            wb = accepted.contains(g.objectId[jb]) ? wb : 0.0f;
+            sum += ca * wa + cb * wb;
+            sumW += wa + wb;
         }
         // Foreground: sumW >= (3/8)^2, the centre tap. Background passes through.
         float keep = 1.0f - foregroundMask(idI);

@@ -36,20 +36,48 @@ RTD_HOST_DEVICE RTD_INLINE float normalAngleSquared(float cosine) {
     }
 }
 
-// Sum of the colour, normal and plane terms of J(i, j) (the exponent without its sign):
+// The terms of J(i, j) (the exponent without its sign), with the plane term's division left to
+// the caller (two taps can share one, EdgeStoppingParts::pairPlaneTerms):
 //   |C_i - C_j|^2 / 2sc^2 + acos(n_i . n_j)^2 / 2sn^2 + (n_i . (p_j - p_i)/|p_j - p_i|)^2 / 2sp^2
-// D_plane is 0 where the positions coincide (no division by zero).
+// D_plane^2 = (n_i . dp)^2 / |dp|^2: no square root needed. |dp|^2 is floored at 1e-18, so D_plane
+// is 0 where the positions coincide (no division by zero) and two floors multiply to a normal
+// float.
+struct EdgeStoppingParts {
+    float colorAndNormal;    // the colour and normal terms
+    float planeNumerator;    // (n_i . dp)^2 / 2sp^2
+    float planeDenominator;  // |dp|^2
+};
+
+template <bool OppositeNormalsVanish = false>
+RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppingTerms& t,
+                                                               Float3 colorI, Float3 colorJ,
+                                                               Float3 normalI, Float3 normalJ,
+                                                               Float3 positionI, Float3 positionJ) {
+    Float3 dc = colorI - colorJ;
+    float dNormal2 = normalAngleSquared<OppositeNormalsVanish>(dot(normalI, normalJ));
+    Float3 dp = positionJ - positionI;
+    float alongNormal = dot(normalI, dp);
+    return {dot(dc, dc) * t.colorScale + dNormal2 * t.normalScale,
+            alongNormal * alongNormal * t.planeScale, maxf(dot(dp, dp), 1e-18f)};
+}
+
+// The whole exponent of one tap.
 template <bool OppositeNormalsVanish = false>
 RTD_HOST_DEVICE RTD_INLINE float edgeStoppingExponent(const EdgeStoppingTerms& t, Float3 colorI,
                                                       Float3 colorJ, Float3 normalI, Float3 normalJ,
                                                       Float3 positionI, Float3 positionJ) {
-    Float3 dc = colorI - colorJ;
-    float dNormal2 = normalAngleSquared<OppositeNormalsVanish>(dot(normalI, normalJ));
-    Float3 dp = positionJ - positionI;
-    // D_plane^2 = (n_i . dp)^2 / |dp|^2: no square root needed.
-    float alongNormal = dot(normalI, dp);
-    float dPlane2 = divideApprox(alongNormal * alongNormal, maxf(dot(dp, dp), 1e-20f));
-    return dot(dc, dc) * t.colorScale + dNormal2 * t.normalScale + dPlane2 * t.planeScale;
+    EdgeStoppingParts p = edgeStoppingParts<OppositeNormalsVanish>(t, colorI, colorJ, normalI,
+                                                                   normalJ, positionI, positionJ);
+    return p.colorAndNormal + divideApprox(p.planeNumerator, p.planeDenominator);
+}
+
+// The exponents of two taps with one division between them: 1 / (d_a d_b) times d_b, then d_a.
+RTD_HOST_DEVICE RTD_INLINE void pairExponents(const EdgeStoppingParts& a,
+                                              const EdgeStoppingParts& b, float& exponentA,
+                                              float& exponentB) {
+    float inverseProduct = divideApprox(1.0f, a.planeDenominator * b.planeDenominator);
+    exponentA = a.colorAndNormal + a.planeNumerator * (b.planeDenominator * inverseProduct);
+    exponentB = b.colorAndNormal + b.planeNumerator * (a.planeDenominator * inverseProduct);
 }
 
 }  // namespace rtd
