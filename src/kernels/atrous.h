@@ -59,7 +59,7 @@ struct Atrous {
             sum += ca * wa + cb * wb;
             sumW += wa + wb;
         }
-        // Foreground: sumW >= (3/8)^2, the centre tap. Background passes through.
+        // Foreground: sumW is at least about (3/8)^2, the centre tap. Background passes through.
         float keep = 1.0f - foregroundMask(idI);
         float scale = (1.0f - keep) / maxf(sumW, 1e-20f);
         out.store(i, sum * scale + ci * keep);

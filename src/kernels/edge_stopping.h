@@ -37,7 +37,7 @@ RTD_HOST_DEVICE RTD_INLINE float normalAngleSquared(float cosine) {
 }
 
 // The terms of J(i, j) (the exponent without its sign), with the plane term's division left to
-// the caller (two taps can share one, EdgeStoppingParts::pairPlaneTerms):
+// the caller (two taps can share one: pairExponents):
 //   |C_i - C_j|^2 / 2sc^2 + acos(n_i . n_j)^2 / 2sn^2 + (n_i . (p_j - p_i)/|p_j - p_i|)^2 / 2sp^2
 // D_plane^2 = (n_i . dp)^2 / |dp|^2: no square root needed. |dp|^2 is floored at 1e-18, so D_plane
 // is 0 where the positions coincide (no division by zero) and two floors multiply to a normal
