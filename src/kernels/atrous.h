@@ -25,7 +25,8 @@ struct Atrous {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 ci = in.load(i);
-        Float3 ni = g.normal.load(i), pi = g.position.load(i);
+        Float3 ni = g.normal.load(i);
+        EdgeStoppingCentre centre = edgeStoppingCentre(edges, ci, ni, g.position.load(i));
         std::int32_t idI = g.objectId[i];
         // Taps from the centre's object, or any object (a background centre's result is unused).
         AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
@@ -45,9 +46,9 @@ struct Atrous {
             PixelIndex ja = i + o, jb = i - o;
             Float3 ca = in.load(ja), cb = in.load(jb);
             EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(
-                edges, ci, ca, ni, g.normal.load(ja), pi, g.position.load(ja));
+                edges, centre, ca, g.normal.load(ja), g.position.load(ja));
             EdgeStoppingParts b = edgeStoppingParts<OppositeNormalsVanish>(
-                edges, ci, cb, ni, g.normal.load(jb), pi, g.position.load(jb));
+                edges, centre, cb, g.normal.load(jb), g.position.load(jb));
             float exponentA, exponentB;
             pairExponents(a, b, exponentA, exponentB);
             // The kernel value k = 2^log2k enters the exponent: no multiplication.

@@ -25,7 +25,8 @@ struct Jbf {
             out.store(i, ci);
             return;
         }
-        Float3 ni = g.normal.load(i), pi = g.position.load(i);
+        EdgeStoppingCentre centre =
+            edgeStoppingCentre(edges, ci, g.normal.load(i), g.position.load(i));
         std::int32_t idI = g.objectId[i];
         AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
         float sumR = 0.0f, sumG = 0.0f, sumB = 0.0f, sumW = 0.0f;
@@ -39,7 +40,7 @@ struct Jbf {
                 Float3 cj = in.load(j);
                 float exponent = (float(dx * dx) + dy2) * coordScale +
                                  edgeStoppingExponent<OppositeNormalsVanish>(
-                                     edges, ci, cj, ni, g.normal.load(j), pi, g.position.load(j));
+                                     edges, centre, cj, g.normal.load(j), g.position.load(j));
                 float w = expNegative(-exponent);  // then selected: no branch around it
                 w = accepted.contains(g.objectId[j]) ? w : 0.0f;
                 sumR += w * cj.x;
