@@ -2,6 +2,7 @@
 // kernel-level known-answer tests.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 
 #include "devices/device.h"
@@ -9,6 +10,16 @@
 namespace rtd {
 
 // Padded planar buffers for a w x h image, as the Denoiser lays them out.
+// A small deterministic generator of floats in [0, 1) (a linear congruential generator), the
+// same sequence on every platform.
+struct UnitRandom {
+    std::uint32_t state;
+    float operator()() {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) / float(1 << 24);
+    }
+};
+
 struct Harness {
     // A flat wall facing the camera (normal -z, z = 5), one object, everything else 0.
     std::unique_ptr<Device> device = createCpuDevice();

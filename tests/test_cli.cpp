@@ -63,7 +63,7 @@ TEST(Cli, DenoisesASequenceIntoResultFiles) {
         for (const char* view : {"reprojection_", "variance_", "history_"})
             EXPECT_TRUE(fs::exists(dir.path() / "out" / (view + n + ".png"))) << view << n;
     }
-    EXPECT_NE(r.output.find("frame 3/3"), std::string::npos) << r.output;      // progress
+    EXPECT_NE(r.output.find("frame 3/3"), std::string::npos) << r.output;        // progress
     EXPECT_NE(r.output.find("svgf-accumulate"), std::string::npos) << r.output;  // per-pass summary
     Image result = readExr(dir.path() / "out" / "result_2.exr", {{"R"}, {"G"}, {"B"}});
     EXPECT_EQ(result.width, 24);
@@ -153,17 +153,24 @@ TEST(Cli, WritesAVideoWhenFfmpegIsThere) {
 namespace rtd {
 namespace {
 
+// `rtdenoise bench` on small rendered inputs cached in `dir`, its JSON in dir/bench.json.
+Result runBench(const test::TempFolder& dir, const std::string& options) {
+    return runCli("bench --size 64x48 --input-frames 2 " + options + " --cache " +
+                  quoted(dir.path() / "cache") + " --json " + quoted(dir.path() / "bench.json"));
+}
+
+std::string readText(const fs::path& path) {
+    std::ifstream in(path);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 TEST(Cli, BenchReportsEveryCaseAsTableAndJson) {
     test::TempFolder dir("cli-bench");
-    Result r = runCli(
-        "bench --size 64x48 --method atrous svgf --frames 3 --input-frames 2 "
-        "--cache " +
-        quoted(dir.path() / "cache") + " --json " + quoted(dir.path() / "bench.json"));
+    Result r = runBench(dir, "--method atrous svgf --frames 3");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("machine:"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("svgf-accumulate"), std::string::npos) << r.output;  // per pass
-    std::ifstream in(dir.path() / "bench.json");
-    std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string json = readText(dir.path() / "bench.json");
     EXPECT_NE(json.find("\"method\": \"atrous\""), std::string::npos) << json;
     EXPECT_NE(json.find("\"method\": \"svgf\""), std::string::npos) << json;
     EXPECT_NE(json.find("\"width\": 64, \"height\": 48"), std::string::npos) << json;
@@ -172,10 +179,7 @@ TEST(Cli, BenchReportsEveryCaseAsTableAndJson) {
 
 TEST(Cli, BenchComparesInstructionSetsAgainstTheScalarKernels) {
     test::TempFolder dir("cli-bench-isa");
-    Result r = runCli(
-        "bench --size 64x48 --method atrous --frames 2 --input-frames 2 --device "
-        "cpu-scalar cpu --cache " +
-        quoted(dir.path() / "cache") + " --json " + quoted(dir.path() / "b.json"));
+    Result r = runBench(dir, "--method atrous --frames 2 --device cpu-scalar cpu");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     // The scalar row is the baseline (1.0); the vectorised row carries its own speed-up, the
     // last number on its line.
@@ -187,8 +191,7 @@ TEST(Cli, BenchComparesInstructionSetsAgainstTheScalarKernels) {
     };
     EXPECT_DOUBLE_EQ(lastNumberOf("atrous    cpu-scalar "), 1.0) << r.output;
     EXPECT_GT(lastNumberOf("atrous    cpu        "), 0.0) << r.output;
-    std::ifstream in(dir.path() / "b.json");
-    std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string json = readText(dir.path() / "bench.json");
     EXPECT_NE(json.find("\"device_bytes\": "), std::string::npos) << json;
     EXPECT_NE(json.find("\"cpu_kernels\": "), std::string::npos) << json;
     // Choices are names in any case; the scalar kernels run from the command line too.

@@ -110,11 +110,7 @@ TEST(Atrous, SquareRootFreeNormalTermGivesTheSameResultWhereOppositeNormalsVanis
     wide.normalScale = 1.0f / (2.0f * 0.5f * 0.5f);
     EXPECT_FALSE(oppositeNormalsVanish(wide));
     Harness h(24, 24, 8);
-    std::uint32_t state = 7;
-    auto next = [&state] {
-        state = state * 1664525u + 1013904223u;
-        return float(state >> 8) / float(1 << 24);
-    };
+    UnitRandom next{7u};
     for (int y = 0; y < 24; ++y)
         for (int x = 0; x < 24; ++x) {
             auto i = h.layout.index(x, y);
@@ -184,11 +180,7 @@ template <int MaxRadius>
 void expectSeparableSumsEqualDirect(int r) {
     // Random colours and a background hole.
     Harness h(23, 17, kWideWindow);
-    std::uint32_t state = 12345;
-    auto next = [&state] {
-        state = state * 1664525u + 1013904223u;
-        return float(state >> 8) / float(1 << 24);
-    };
+    UnitRandom next{12345u};
     for (int y = 0; y < 17; ++y)
         for (int x = 0; x < 23; ++x) {
             h.planes(h.a).store(h.layout.index(x, y), make3(next(), next(), next()));

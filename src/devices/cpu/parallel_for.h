@@ -101,25 +101,11 @@ inline int interleavedRow(int k, int height, int stride) {
     return longClasses + k / perClass + (k % perClass) * stride;
 }
 
-// Rows in classes of equal y mod stride, shared out to the cores in that order.
-template <class Kernel>
-void parallelFor2DInterleaved(int width, int height, int stride, const Kernel& kernel) {
-#pragma omp parallel
-    {
-        flushDenormalsToZero();
-        const Kernel local = kernel;  // as in parallelFor2D
-#pragma omp for schedule(dynamic, 4)
-        for (int k = 0; k < height; ++k) runRow(local, 0, width, interleavedRow(k, height, stride));
-    }
-}
-
-template <class Kernel>
-void parallelFor2D(int width, int height, const Kernel& kernel) {
-    if constexpr (TapRowStrided<Kernel>) {
-        int stride = kernel.tapRowStride();
-        if (stride > 1 && stride < height && interleaveRows(stride, width))
-            return parallelFor2DInterleaved(width, height, stride, kernel);
-    }
+// Rows shared out to all cores, the k-th visited being rowOf(k). Each order gets its own
+// instantiation: folded into one function with the order chosen at run time, the plain order's
+// SVGF A-Trous ran 8 % slower at 512x512 (a clean-build A/B).
+template <class Kernel, class RowOf>
+void parallelRows(int width, int height, const Kernel& kernel, RowOf rowOf) {
 #pragma omp parallel
     {
         flushDenormalsToZero();
@@ -129,8 +115,19 @@ void parallelFor2D(int width, int height, const Kernel& kernel) {
         // the compiler reloaded them per pixel and wrote the planes with scatters.
         const Kernel local = kernel;
 #pragma omp for schedule(dynamic, 4)
-        for (int y = 0; y < height; ++y) runRow(local, 0, width, y);
+        for (int k = 0; k < height; ++k) runRow(local, 0, width, rowOf(k));
     }
+}
+
+template <class Kernel>
+void parallelFor2D(int width, int height, const Kernel& kernel) {
+    if constexpr (TapRowStrided<Kernel>) {
+        int stride = kernel.tapRowStride();
+        if (stride > 1 && stride < height && interleaveRows(stride, width))
+            return parallelRows(width, height, kernel,
+                                [=](int k) { return interleavedRow(k, height, stride); });
+    }
+    parallelRows(width, height, kernel, [](int k) { return k; });
 }
 
 }  // namespace
