@@ -320,17 +320,18 @@ struct Denoiser::Impl {
         addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
             launchWindowed<ColorRowSums>(radius, gbuffer(), planes(filtered), sums(), radius);
         });
-        addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity"},
-                {"output", "history"}, [this, alpha, k, radius] {
-                    launchWindowed<Accumulate>(radius, gbuffer(), sums(), planes(filtered),
-                                               planes(reprojected), validity.data(),
-                                               planes(history[current]), alpha, k, radius);
+        // Modulates too: the result goes out from registers, not read back by a modulate pass.
+        addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity", "albedo"},
+                {"history", "output"}, [this, alpha, k, radius] {
+                    launchWindowed<AccumulateModulated>(
+                        radius, gbuffer(), sums(), planes(filtered), planes(reprojected),
+                        validity.data(), planes(history[current]), alpha, k, radius,
+                        planes(albedo), outputTarget);
                 });
     }
 
     // Where an svgf stage keeps illumination + variance (4 planes).
     enum class Slot { Variance, A, B, Feedback };
-    Slot svgfResult = Slot::Variance;  // where the last iteration leaves its output
     DeviceBuffer<float>& slot(Slot s) {
         switch (s) {
             case Slot::Variance:
@@ -414,20 +415,36 @@ struct Denoiser::Impl {
             bool isFeedback = it == sv.feedbackIteration;
             Slot dst = isFeedback ? Slot::Feedback : (src == Slot::A ? Slot::B : Slot::A);
             int stride = 1 << it;
-            addPass(fmt::format("svgf-atrous{}", it),
-                    {slotName(src), "normal", "depth", "derivatives"}, {slotName(dst)},
-                    [this, terms, stride, src, dst] {
+            // The last iteration modulates too: the result goes out from registers, not read
+            // back by a modulate pass.
+            bool last = it == sv.iterations - 1;
+            std::vector<std::string> inputs = {slotName(src), "normal", "depth", "derivatives"};
+            std::vector<std::string> outputs = {slotName(dst)};
+            if (last) {
+                inputs.push_back("albedo");
+                outputs.push_back("output");
+            }
+            addPass(fmt::format("svgf-atrous{}", it), inputs, outputs,
+                    [this, terms, stride, src, dst, last] {
                         PlaneSet from = planeSet(slot(src)), to = planeSet(slot(dst));
-                        if (normalFactorBySquarings(terms))  // no logarithm per tap
-                            launch(SvgfAtrousNormal128Kernel{gbuffer(), planeSet(derivatives), from,
-                                                             to, stride, terms});
+                        PlaneSet d = planeSet(derivatives);
+                        Planes3 a = planes(albedo);
+                        bool squarings = normalFactorBySquarings(terms);  // no logarithm per tap
+                        if (last && squarings)
+                            launch(SvgfAtrousNormal128ModulatedKernel{gbuffer(), d, from, to,
+                                                                      stride, terms, a,
+                                                                      outputTarget});
+                        else if (last)
+                            launch(SvgfAtrousModulatedKernel{gbuffer(), d, from, to, stride,
+                                                             terms, a, outputTarget});
+                        else if (squarings)
+                            launch(SvgfAtrousNormal128Kernel{gbuffer(), d, from, to, stride,
+                                                             terms});
                         else
-                            launch(SvgfAtrousKernel{gbuffer(), planeSet(derivatives), from, to,
-                                                    stride, terms});
+                            launch(SvgfAtrousKernel{gbuffer(), d, from, to, stride, terms});
                     });
             src = dst;
         }
-        svgfResult = src;
     }
 
     void buildPipeline() {
@@ -468,16 +485,13 @@ struct Denoiser::Impl {
                 break;
         }
         // Multiply the albedo back (1 without one), written straight into the caller's
-        // interleaved output (or the staging buffer a GPU copies it from).
-        std::string resultName = settings.method == Method::Temporal ? "history"
-                                 : settings.method == Method::Svgf   ? slotName(svgfResult)
-                                                                     : "filtered";
-        addPass("modulate", {resultName, "albedo"}, {"output"}, [this] {
-            Planes3 result = settings.method == Method::Temporal ? planes(history[current])
-                             : settings.method == Method::Svgf   ? planes(slot(svgfResult))
-                                                                 : planes(filtered);
-            launch(ModulateKernel{layout, result, planes(albedo), outputTarget});
-        });
+        // interleaved output (or the staging buffer a GPU copies it from). The temporal
+        // method's accumulation and the svgf method's last iteration did it already.
+        if (settings.method == Method::Jbf || settings.method == Method::Atrous) {
+            addPass("modulate", {"filtered", "albedo"}, {"output"}, [this] {
+                launch(ModulateKernel{layout, planes(filtered), planes(albedo), outputTarget});
+            });
+        }
         if (int(pipeline.size()) >= Device::kTimestampSlots)
             throw Error(ErrorCode::InvalidArgument, "settings: too many passes to time");
         for (const Pass& p : pipeline) passInfos.push_back(p.info);

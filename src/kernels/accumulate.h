@@ -4,12 +4,15 @@
 // invalid. Runs after ColorRowSumsKernel (the column half of the window).
 #pragma once
 
+#include "kernels/modulate.h"
 #include "kernels/reproject.h"
 #include "kernels/window_sums.h"
 
 namespace rtd {
 
-template <int MaxRadius>
+// Modulated: also writes the result times the albedo factor into the caller's interleaved RGB
+// (ModulateKernel's job, fused: the result is not read back from memory).
+template <int MaxRadius, bool Modulated = false>
 struct Accumulate {
     GBufferView g;
     PlaneSet rowSums;     // from ColorRowSums<MaxRadius> over `current`
@@ -20,6 +23,8 @@ struct Accumulate {
     float alpha;
     float clampK;
     int radius;  // <= MaxRadius
+    Planes3 albedo = {};       // Modulated only
+    float* rgbOut = nullptr;   // Modulated only: interleaved, 3 floats per pixel
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
@@ -30,10 +35,16 @@ struct Accumulate {
         ColorWindowStats w = colorWindowStats<MaxRadius>(rowSums, i, L.pitch, radius);
         Float3 history =
             clamp3(reprojected.load(i), w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
-        out.store(i, c * a + history * (1.0f - a));
+        Float3 result = c * a + history * (1.0f - a);
+        out.store(i, result);
+        if constexpr (Modulated) storeModulated(L, rgbOut, x, y, result * albedo.load(i));
     }
 };
 using AccumulateKernel = Accumulate<kNarrowWindow>;
 using AccumulateWideKernel = Accumulate<kWideWindow>;
+template <int MaxRadius>
+using AccumulateModulated = Accumulate<MaxRadius, true>;
+using AccumulateModulatedKernel = AccumulateModulated<kNarrowWindow>;
+using AccumulateModulatedWideKernel = AccumulateModulated<kWideWindow>;
 
 }  // namespace rtd

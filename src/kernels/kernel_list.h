@@ -28,6 +28,8 @@
     X(ReprojectKernel)             \
     X(AccumulateKernel)            \
     X(AccumulateWideKernel)        \
+    X(AccumulateModulatedKernel)     \
+    X(AccumulateModulatedWideKernel) \
     X(SvgfReprojectKernel)         \
     X(SvgfReprojectSearchKernel)   \
     X(SvgfAccumulateKernel)        \
@@ -35,4 +37,6 @@
     X(SvgfVarianceNormal128Kernel) \
     X(SvgfAtrousKernel)            \
     X(SvgfAtrousNormal128Kernel)   \
+    X(SvgfAtrousModulatedKernel)   \
+    X(SvgfAtrousNormal128ModulatedKernel) \
     X(ModulateKernel)

@@ -6,6 +6,15 @@
 
 namespace rtd {
 
+// One pixel of the caller's interleaved RGB (rows of `width` pixels).
+RTD_HOST_DEVICE RTD_INLINE void storeModulated(const Layout& layout, float* rgbOut, int x, int y,
+                                               Float3 c) {
+    PixelIndex s = PixelIndex(y) * layout.width + x;
+    rgbOut[3 * s] = c.x;
+    rgbOut[3 * s + 1] = c.y;
+    rgbOut[3 * s + 2] = c.z;
+}
+
 // Fused with the output: writes the caller's interleaved RGB (rows of `width` pixels) directly,
 // one pass over the result instead of a modulate pass and a packing pass.
 struct ModulateKernel {
@@ -16,11 +25,7 @@ struct ModulateKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = layout.index(x, y);
-        PixelIndex s = PixelIndex(y) * layout.width + x;
-        Float3 c = illumination.load(i) * albedo.load(i);
-        rgbOut[3 * s] = c.x;
-        rgbOut[3 * s + 1] = c.y;
-        rgbOut[3 * s + 2] = c.z;
+        storeModulated(layout, rgbOut, x, y, illumination.load(i) * albedo.load(i));
     }
 };
 

@@ -12,6 +12,7 @@
 // which made results depend on the rounding of each instruction set and back end.
 #pragma once
 
+#include "kernels/modulate.h"
 #include "kernels/reproject.h"
 #include "kernels/views.h"
 #include "kernels/window_sums.h"
@@ -295,14 +296,25 @@ using SvgfVarianceNormal128Kernel = SvgfVariance<kPaperNormalSquarings>;
 
 // One variance-guided A-Trous iteration: 5x5 B3-spline taps at `stride`, luminance tolerance
 // sigma_l times the 3x3-Gaussian-prefiltered standard deviation; the variance is carried with
-// squared weights, var' = sum w^2 var / (sum w)^2.
-template <int NormalSquarings>
+// squared weights, var' = sum w^2 var / (sum w)^2. Modulated (the last iteration): also writes
+// the result times the albedo factor into the caller's interleaved RGB (ModulateKernel's job,
+// fused: the result is not read back from memory).
+template <int NormalSquarings, bool Modulated = false>
 struct SvgfAtrous {
     GBufferView g;
     PlaneSet derivatives;
     PlaneSet in, out;  // rgb + variance
     int stride;
     SvgfTerms terms;
+    Planes3 albedo = {};      // Modulated only
+    float* rgbOut = nullptr;  // Modulated only: interleaved, 3 floats per pixel
+
+    RTD_HOST_DEVICE RTD_INLINE void store(int x, int y, PixelIndex i, Float3 color,
+                                          float variance) const {
+        out.rgb().store(i, color);
+        out.at(3, i) = variance;
+        if constexpr (Modulated) storeModulated(g.layout, rgbOut, x, y, color * albedo.load(i));
+    }
     // The rows it reads are `stride` apart (the CPU launcher's row order, parallel_for.h).
     RTD_HOST_DEVICE int tapRowStride() const { return stride; }
 
@@ -316,8 +328,7 @@ struct SvgfAtrous {
         Float3 cI = in.rgb().load(i);
         float varianceI = in.at(3, i);
         if (id < 0) {
-            out.rgb().store(i, cI);
-            out.at(3, i) = varianceI;
+            store(x, y, i, cI, varianceI);
             return;
         }
         AcceptedIds accepted = acceptedIds(terms.separateObjects, id);
@@ -364,12 +375,13 @@ struct SvgfAtrous {
             }
         }
         float inv = 1.0f / sumW;  // >= (3/8)^2, the centre's
-        out.rgb().store(i, sum * inv);
-        out.at(3, i) = sumVar * inv * inv;
+        store(x, y, i, sum * inv, sumVar * inv * inv);
     }
 };
 using SvgfAtrousKernel = SvgfAtrous<-1>;  // any sigma_n
 // sigma_n = 128 (the paper's and the default): the normal factor by squarings, no logarithm.
 using SvgfAtrousNormal128Kernel = SvgfAtrous<kPaperNormalSquarings>;
+using SvgfAtrousModulatedKernel = SvgfAtrous<-1, true>;
+using SvgfAtrousNormal128ModulatedKernel = SvgfAtrous<kPaperNormalSquarings, true>;
 
 }  // namespace rtd
