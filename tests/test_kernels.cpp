@@ -161,6 +161,44 @@ TEST(Accumulate, ClampsHistoryToMeanPlusMinusKSigmaThenBlends) {
     EXPECT_EQ(h.planes(h.c).load(h.layout.index(1, 1)).x, 5.0f);
 }
 
+// The fused modulation: the same history as the plain kernel, and the caller's interleaved RGB
+// holding it times the albedo factor.
+TEST(Accumulate, ModulatedKernelAlsoWritesTheResultTimesTheAlbedoInterleaved) {
+    const int n = 9;
+    Harness h(n, n, kNarrowWindow);
+    DeviceBuffer<float> albedo = h.buffer(3), fused = h.buffer(3);
+    std::vector<float> rgb(3 * n * n, -1.0f);
+    UnitRandom next{3u};
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            auto i = h.layout.index(x, y);
+            h.planes(h.a).store(i, make3(next(), next(), next()));
+            h.planes(h.b).store(i, make3(next(), next(), next()));
+            h.planes(albedo).store(i, make3(0.5f + next(), 0.5f + next(), 0.5f + next()));
+            h.validity.data()[i] = (x + y) % 3 ? kReprojectionValid : kReprojectionOtherObject;
+        }
+    h.accumulate(0.2f, 1.0f, 2);  // the plain kernel, into h.c
+    h.device->launch(AccumulateModulatedKernel{h.gbuffer(), h.sumPlanes(), h.planes(h.a),
+                                               h.planes(h.b), h.validity.data(),
+                                               h.planes(fused), 0.2f, 1.0f, 2, h.planes(albedo),
+                                               rgb.data()},
+                     n, n);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            auto i = h.layout.index(x, y);
+            Float3 p = h.planes(h.c).load(i), f = h.planes(fused).load(i),
+                   a = h.planes(albedo).load(i);
+            // Another instantiation: the compiler may order the arithmetic differently.
+            EXPECT_NEAR(f.x, p.x, 1e-6f * p.x);
+            EXPECT_NEAR(f.y, p.y, 1e-6f * p.y);
+            EXPECT_NEAR(f.z, p.z, 1e-6f * p.z);
+            const float* out = &rgb[std::size_t(3 * (y * n + x))];
+            EXPECT_FLOAT_EQ(out[0], f.x * a.x) << x << ", " << y;
+            EXPECT_FLOAT_EQ(out[1], f.y * a.y) << x << ", " << y;
+            EXPECT_FLOAT_EQ(out[2], f.z * a.z) << x << ", " << y;
+        }
+}
+
 TEST(Outlier, FireflyIsClampedToMeanPlusTwoSigmaOthersKept) {
     Harness h(7, 7, 3);
     h.setAll(h.a, make3(1.0f, 1.0f, 1.0f));

@@ -37,6 +37,51 @@ TEST(SvgfKernels, VarianceIsPropagatedWithSquaredWeights) {
     }
 }
 
+// The last iteration's fused modulation: the same planes as the plain kernel, and the caller's
+// interleaved RGB holding them times the albedo factor (a background pixel too).
+TEST(SvgfKernels, ModulatedIterationAlsoWritesTheResultTimesTheAlbedoInterleaved) {
+    const int n = 12;
+    Harness h(n, n, 8);
+    DeviceBuffer<float> in = h.buffer(4), plain = h.buffer(4), fused = h.buffer(4),
+                        albedo = h.buffer(3), derivatives = h.buffer(3);
+    std::vector<float> rgb(3 * n * n, -1.0f);
+    UnitRandom next{7u};
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            auto i = h.layout.index(x, y);
+            h.planeSet(in).rgb().store(i, make3(next(), next(), next()));
+            h.planeSet(in).at(3, i) = 0.05f;
+            h.planes(albedo).store(i, make3(0.5f + next(), 0.5f + next(), 0.5f + next()));
+        }
+    h.ids.data()[h.layout.index(3, 4)] = -1;  // background: passes through, modulated too
+    h.device->launch(SvgfAtrousNormal128Kernel{h.gbuffer(), h.planeSet(derivatives),
+                                               h.planeSet(in), h.planeSet(plain), 2,
+                                               paperTerms()},
+                     n, n);
+    h.device->launch(SvgfAtrousNormal128ModulatedKernel{h.gbuffer(), h.planeSet(derivatives),
+                                                        h.planeSet(in), h.planeSet(fused), 2,
+                                                        paperTerms(), h.planes(albedo),
+                                                        rgb.data()},
+                     n, n);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            auto i = h.layout.index(x, y);
+            Float3 p = h.planeSet(plain).rgb().load(i), f = h.planeSet(fused).rgb().load(i);
+            // Another instantiation: the compiler may order the sums differently.
+            EXPECT_NEAR(f.x, p.x, 1e-6f * p.x);
+            EXPECT_NEAR(f.z, p.z, 1e-6f * p.z);
+            EXPECT_NEAR(h.planeSet(fused).at(3, i), h.planeSet(plain).at(3, i),
+                        1e-6f * h.planeSet(plain).at(3, i));
+            Float3 a = h.planes(albedo).load(i);
+            const float* out = &rgb[std::size_t(3 * (y * n + x))];
+            EXPECT_FLOAT_EQ(out[0], f.x * a.x) << x << ", " << y;
+            EXPECT_FLOAT_EQ(out[1], f.y * a.y) << x << ", " << y;
+            EXPECT_FLOAT_EQ(out[2], f.z * a.z) << x << ", " << y;
+        }
+    EXPECT_FLOAT_EQ(rgb[3 * (4 * n + 3)], h.planeSet(in).rgb().load(h.layout.index(3, 4)).x *
+                                              h.planes(albedo).load(h.layout.index(3, 4)).x);
+}
+
 TEST(SvgfKernels, NormalPowerBySquaringsEqualsTheLogarithmForm) {
     // sigma_n = 128 both ways (7 squarings; exp of 128 ln n.n') over normals tilted by up to
     // ~25 degrees (weights from 1 down to ~1e-6) and a noisy colour: the same output.
