@@ -100,6 +100,44 @@ TEST(Atrous, ConstantImageIsUnchangedAtTheBorderToo) {
         }
 }
 
+// The atrous method's last level: the plain kernel's result, and the caller's interleaved RGB
+// holding it times the albedo factor (a background pixel, passed through, too).
+TEST(Atrous, ModulatedLevelAlsoWritesTheResultTimesTheAlbedoInterleaved) {
+    const int w = 14, hgt = 10;
+    Harness h(w, hgt, 8);
+    DeviceBuffer<float> albedo = h.buffer(3);
+    std::vector<float> rgb(3 * w * hgt, -1.0f);
+    UnitRandom next{5u};
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = h.layout.index(x, y);
+            h.planes(h.a).store(i, make3(next(), next(), next()));
+            h.planes(albedo).store(i, make3(0.5f + next(), 0.5f + next(), 0.5f + next()));
+        }
+    h.ids.data()[h.layout.index(6, 3)] = -1;
+    const EdgeStoppingTerms terms{1.39f, 50.0f, 50.0f, 1};
+    h.device->launch(AtrousNarrowNormalKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 2, terms},
+                     w, hgt);
+    h.device->launch(AtrousNarrowNormalModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.c),
+                                                       2, terms, h.planes(albedo), rgb.data()},
+                     w, hgt);
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = h.layout.index(x, y);
+            Float3 p = h.planes(h.b).load(i), f = h.planes(h.c).load(i),
+                   a = h.planes(albedo).load(i);
+            // Another instantiation: the compiler may order the sums differently.
+            EXPECT_NEAR(f.x, p.x, 1e-6f * p.x);
+            EXPECT_NEAR(f.z, p.z, 1e-6f * p.z);
+            const float* out = &rgb[std::size_t(3 * (y * w + x))];
+            EXPECT_FLOAT_EQ(out[0], f.x * a.x) << x << ", " << y;
+            EXPECT_FLOAT_EQ(out[1], f.y * a.y) << x << ", " << y;
+            EXPECT_FLOAT_EQ(out[2], f.z * a.z) << x << ", " << y;
+        }
+    EXPECT_EQ(h.planes(h.c).load(h.layout.index(6, 3)).y,
+              h.planes(h.a).load(h.layout.index(6, 3)).y);  // background passes through
+}
+
 TEST(Atrous, SquareRootFreeNormalTermGivesTheSameResultWhereOppositeNormalsVanish) {
     // sigma_normal 0.1 (the assignment's): normals in every direction, including opposite ones,
     // and a noisy colour; the square-root-free kernel equals the general one.

@@ -4,16 +4,21 @@
 #pragma once
 
 #include "kernels/edge_stopping.h"
+#include "kernels/modulate.h"
 #include "kernels/views.h"
 
 namespace rtd {
 
-template <bool OppositeNormalsVanish>
+// Modulated (the atrous method's last level): also writes the result times the albedo factor
+// into the caller's interleaved RGB (ModulateKernel's job, fused: the result is not read back).
+template <bool OppositeNormalsVanish, bool Modulated = false>
 struct Atrous {
     GBufferView g;
     Planes3 in, out;
     int stride;  // 2 * stride <= layout.padding
     EdgeStoppingTerms edges;
+    Planes3 albedo = {};      // Modulated only
+    float* rgbOut = nullptr;  // Modulated only: interleaved, 3 floats per pixel
     // The rows it reads are `stride` apart (the CPU launcher's row order, parallel_for.h).
     RTD_HOST_DEVICE int tapRowStride() const { return stride; }
 
@@ -63,11 +68,15 @@ struct Atrous {
         // Foreground: sumW is at least about (3/8)^2, the centre tap. Background passes through.
         float keep = 1.0f - foregroundMask(idI);
         float scale = (1.0f - keep) / maxf(sumW, 1e-20f);
-        out.store(i, sum * scale + ci * keep);
+        Float3 result = sum * scale + ci * keep;
+        out.store(i, result);
+        if constexpr (Modulated) storeModulated(L, rgbOut, x, y, result * albedo.load(i));
     }
 };
 using AtrousKernel = Atrous<false>;  // any sigma_normal
 // sigma_normal <= 0.118 (the assignment's 0.1): no square root per tap (edge_stopping.h).
 using AtrousNarrowNormalKernel = Atrous<true>;
+using AtrousModulatedKernel = Atrous<false, true>;
+using AtrousNarrowNormalModulatedKernel = Atrous<true, true>;
 
 }  // namespace rtd

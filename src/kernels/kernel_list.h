@@ -24,6 +24,8 @@
     X(JbfNarrowNormalKernel)       \
     X(AtrousKernel)                \
     X(AtrousNarrowNormalKernel)    \
+    X(AtrousModulatedKernel)       \
+    X(AtrousNarrowNormalModulatedKernel) \
     X(GeometryDerivativesKernel)   \
     X(ReprojectKernel)             \
     X(AccumulateKernel)            \
