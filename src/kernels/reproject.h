@@ -65,18 +65,21 @@ RTD_HOST_DEVICE RTD_INLINE void loadTaps(const T* plane, const HistoryTaps<Taps>
 // Search3x3: when all four bilinear taps fail the history test, average the 3x3 taps that pass.
 // Branch-free: every test yields a mask, and a pixel that fails one still computes the rest on
 // safe (clamped) coordinates; needs layout.padding >= 2.
-template <bool Search3x3>
+// KnownId: the caller knows the pixel's object ID (`knownId`, the same for a whole run of pixels
+// on the CPU, parallel_for.h), so the object's matrices are one value for the run rather than
+// gathered per pixel.
+template <bool Search3x3, bool KnownId = false>
 RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     const GBufferView& g, PixelIndex i, const PreviousGeometry& previous,
     const ObjectReprojection* objects, int objectCount, const PlaneSet& derivatives,
-    const HistoryTest& test, int hasHistory) {
+    const HistoryTest& test, int hasHistory, std::int32_t knownId = 0) {
     constexpr int kTaps = Search3x3 ? 9 : 4;
     const Layout& L = g.layout;
-    std::int32_t id = g.objectId[i];
+    std::int32_t id = KnownId ? knownId : g.objectId[i];
     // An ID the matrices do not cover (unchecked device input) reads object 0, then fails.
-    bool knownId = id >= 0 && id < objectCount;
-    const ObjectReprojection& object = objects[knownId ? id : 0];
-    bool trackable = knownId && hasHistory && object.valid;
+    bool covered = id >= 0 && id < objectCount;
+    const ObjectReprojection& object = objects[covered ? id : 0];
+    bool trackable = covered && hasHistory && object.valid;
 
     Float3 position = g.position.load(i);
     Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
@@ -203,10 +206,16 @@ struct ReprojectKernel {
     std::uint8_t* validity;  // ReprojectionCode per pixel
     int hasHistory;          // 0 on the first frame: nothing to reproject
 
-    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+    // Runs of pixels on one object (the CPU launcher, parallel_for.h): see findHistory.
+    RTD_HOST_DEVICE RTD_INLINE std::int32_t runKey(int x, int y) const {
+        return g.objectId[g.layout.index(x, y)];
+    }
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { pixel<false>(x, y, 0); }
+    template <bool KnownId>
+    RTD_HOST_DEVICE RTD_INLINE void pixel(int x, int y, std::int32_t id) const {
         PixelIndex i = g.layout.index(x, y);
-        auto taps =
-            findHistory<false>(g, i, previous, objects, objectCount, derivatives, test, hasHistory);
+        auto taps = findHistory<false, KnownId>(g, i, previous, objects, objectCount, derivatives,
+                                                test, hasHistory, id);
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps];
         loadTaps(history.data, taps, r);

@@ -112,13 +112,20 @@ struct SvgfReproject {
     std::uint8_t* validity;
     int hasHistory;
 
-    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+    // Runs of pixels on one object (the CPU launcher, parallel_for.h; the search is scalar and
+    // needs none): see findHistory.
+    RTD_HOST_DEVICE RTD_INLINE std::int32_t runKey(int x, int y) const {
+        return g.objectId[g.layout.index(x, y)];
+    }
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { pixel<false>(x, y, 0); }
+    template <bool KnownId>
+    RTD_HOST_DEVICE RTD_INLINE void pixel(int x, int y, std::int32_t id) const {
         PixelIndex i = g.layout.index(x, y);
         if constexpr (Search3x3) {
             if (validity[i] != kReprojectionOtherObject || g.objectId[i] < 0) return;
         }
-        auto taps = findHistory<Search3x3>(g, i, previous, objects, objectCount, derivatives, test,
-                                           hasHistory);
+        auto taps = findHistory<Search3x3, KnownId>(g, i, previous, objects, objectCount,
+                                                    derivatives, test, hasHistory, id);
         validity[i] = taps.code;
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps], means[kTaps], variances[kTaps], lengths[kTaps];

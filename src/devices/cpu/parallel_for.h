@@ -43,10 +43,42 @@ concept BlockSparse = requires(const Kernel& k) {
 };
 constexpr int kSparseBlock = 16;  // one AVX-512 vector of floats
 
+// A kernel with `std::int32_t runKey(int x, int y) const` and
+// `template <bool KnownKey> void pixel(int x, int y, std::int32_t key) const` does less work where
+// neighbouring pixels share their key (an object ID: one set of matrices rather than one gathered
+// per pixel, ReprojectKernel): runs of kSparseBlock pixels with one key call pixel<true> with it,
+// the others pixel<false>.
+template <class Kernel>
+concept KeyedRuns = requires(const Kernel& k) {
+    { k.runKey(0, 0) } -> std::same_as<std::int32_t>;
+    k.template pixel<true>(0, 0, std::int32_t(0));
+};
+
 // One row of [x0, x1): scalar, block-sparse or vectorised, as the kernel declares.
 template <class Kernel>
 RTD_INLINE void runRow(const Kernel& kernel, int x0, int x1, int y) {
-    if constexpr (isSparse<Kernel>()) {
+    if constexpr (KeyedRuns<Kernel> && !isSparse<Kernel>()) {
+        for (int b0 = x0; b0 < x1; b0 += kSparseBlock) {
+            int b1 = b0 + kSparseBlock < x1 ? b0 + kSparseBlock : x1;
+            const std::int32_t key = kernel.runKey(b0, y);
+            int mixed = 0;
+#if !defined(RTD_CPU_SCALAR)
+#pragma omp simd reduction(| : mixed)
+#endif
+            for (int x = b0; x < b1; ++x) mixed |= kernel.runKey(x, y) != key ? 1 : 0;
+            if (mixed) {
+#if !defined(RTD_CPU_SCALAR)
+#pragma omp simd
+#endif
+                for (int x = b0; x < b1; ++x) kernel.template pixel<false>(x, y, 0);
+            } else {
+#if !defined(RTD_CPU_SCALAR)
+#pragma omp simd
+#endif
+                for (int x = b0; x < b1; ++x) kernel.template pixel<true>(x, y, key);
+            }
+        }
+    } else if constexpr (isSparse<Kernel>()) {
 #if defined(__clang__)
 #pragma clang loop vectorize(disable)
 #endif
