@@ -213,7 +213,8 @@ struct Denoiser::Impl {
             for (auto* b : {&reprojected, &history[0], &history[1]}) *b = planesBuffer(3);
         depth[0] = planesBuffer(1);
         depth[1] = planesBuffer(1);
-        derivatives = planesBuffer(3);
+        if (settings.method == Method::Temporal || settings.method == Method::Svgf)
+            derivatives = planesBuffer(3);
         windowSums = planesBuffer(7);
         for (auto& ids : objectId) {  // ID -1 everywhere: the border reads as background
             ids = DeviceBuffer<std::int32_t>(d, padded);
