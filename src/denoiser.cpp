@@ -253,8 +253,8 @@ struct Denoiser::Impl {
 
     // Adds the spatial filter reading `in`; its result lands in `filtered`.
     // modulateLast: the last A-Trous level also writes the output (the atrous method).
-    void addSpatialPasses(SpatialFilter filter, DeviceBuffer<float>* in,
-                          const std::string& inName, bool modulateLast = false) {
+    void addSpatialPasses(SpatialFilter filter, DeviceBuffer<float>* in, const std::string& inName,
+                          bool modulateLast = false) {
         const EdgeStoppingTerms edges = edgeTerms(settings.edges);
         if (filter == SpatialFilter::Jbf) {
             padding = std::max(padding, settings.jbf.radius);
@@ -338,10 +338,10 @@ struct Denoiser::Impl {
         // Modulates too: the result goes out from registers, not read back by a modulate pass.
         addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity", "albedo"},
                 {"history", "output"}, [this, alpha, k, radius] {
-                    launchWindowed<AccumulateModulated>(
-                        radius, gbuffer(), sums(), planes(filtered), planes(reprojected),
-                        validity.data(), planes(history[current]), alpha, k, radius,
-                        planes(albedo), outputTarget);
+                    launchWindowed<AccumulateModulated>(radius, gbuffer(), sums(), planes(filtered),
+                                                        planes(reprojected), validity.data(),
+                                                        planes(history[current]), alpha, k, radius,
+                                                        planes(albedo), outputTarget);
                 });
     }
 
@@ -439,25 +439,24 @@ struct Denoiser::Impl {
                 inputs.push_back("albedo");
                 outputs.push_back("output");
             }
-            addPass(fmt::format("svgf-atrous{}", it), inputs, outputs,
-                    [this, terms, stride, src, dst, last] {
-                        PlaneSet from = planeSet(slot(src)), to = planeSet(slot(dst));
-                        PlaneSet d = planeSet(derivatives);
-                        Planes3 a = planes(albedo);
-                        bool squarings = normalFactorBySquarings(terms);  // no logarithm per tap
-                        if (last && squarings)
-                            launch(SvgfAtrousNormal128ModulatedKernel{gbuffer(), d, from, to,
-                                                                      stride, terms, a,
-                                                                      outputTarget});
-                        else if (last)
-                            launch(SvgfAtrousModulatedKernel{gbuffer(), d, from, to, stride,
-                                                             terms, a, outputTarget});
-                        else if (squarings)
-                            launch(SvgfAtrousNormal128Kernel{gbuffer(), d, from, to, stride,
-                                                             terms});
-                        else
-                            launch(SvgfAtrousKernel{gbuffer(), d, from, to, stride, terms});
-                    });
+            addPass(
+                fmt::format("svgf-atrous{}", it), inputs, outputs,
+                [this, terms, stride, src, dst, last] {
+                    PlaneSet from = planeSet(slot(src)), to = planeSet(slot(dst));
+                    PlaneSet d = planeSet(derivatives);
+                    Planes3 a = planes(albedo);
+                    bool squarings = normalFactorBySquarings(terms);  // no logarithm per tap
+                    if (last && squarings)
+                        launch(SvgfAtrousNormal128ModulatedKernel{gbuffer(), d, from, to, stride,
+                                                                  terms, a, outputTarget});
+                    else if (last)
+                        launch(SvgfAtrousModulatedKernel{gbuffer(), d, from, to, stride, terms, a,
+                                                         outputTarget});
+                    else if (squarings)
+                        launch(SvgfAtrousNormal128Kernel{gbuffer(), d, from, to, stride, terms});
+                    else
+                        launch(SvgfAtrousKernel{gbuffer(), d, from, to, stride, terms});
+                });
             src = dst;
         }
     }
@@ -501,7 +500,7 @@ struct Denoiser::Impl {
         }
         // Multiply the albedo back (1 without one), written straight into the caller's
         // interleaved output (or the staging buffer a GPU copies it from). The other methods'
-        // last passes did it already (the JBF's own pass is 0.3 % of its time).
+        // last passes did it already (the JBF's own pass is under 1 % of its time).
         if (settings.method == Method::Jbf) {
             addPass("modulate", {"filtered", "albedo"}, {"output"}, [this] {
                 launch(ModulateKernel{layout, planes(filtered), planes(albedo), outputTarget});

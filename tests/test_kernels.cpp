@@ -118,8 +118,8 @@ TEST(Atrous, ModulatedLevelAlsoWritesTheResultTimesTheAlbedoInterleaved) {
     const EdgeStoppingTerms terms{1.39f, 50.0f, 50.0f, 1};
     h.device->launch(AtrousNarrowNormalKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 2, terms},
                      w, hgt);
-    h.device->launch(AtrousNarrowNormalModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.c),
-                                                       2, terms, h.planes(albedo), rgb.data()},
+    h.device->launch(AtrousNarrowNormalModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.c), 2,
+                                                       terms, h.planes(albedo), rgb.data()},
                      w, hgt);
     for (int y = 0; y < hgt; ++y)
         for (int x = 0; x < w; ++x) {
@@ -217,9 +217,8 @@ TEST(Accumulate, ModulatedKernelAlsoWritesTheResultTimesTheAlbedoInterleaved) {
         }
     h.accumulate(0.2f, 1.0f, 2);  // the plain kernel, into h.c
     h.device->launch(AccumulateModulatedKernel{h.gbuffer(), h.sumPlanes(), h.planes(h.a),
-                                               h.planes(h.b), h.validity.data(),
-                                               h.planes(fused), 0.2f, 1.0f, 2, h.planes(albedo),
-                                               rgb.data()},
+                                               h.planes(h.b), h.validity.data(), h.planes(fused),
+                                               0.2f, 1.0f, 2, h.planes(albedo), rgb.data()},
                      n, n);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
@@ -384,9 +383,16 @@ TEST(Reproject, RunsOfOneObjectGiveThePerPixelResult) {
     PreviousGeometry previous{h.ids.data(), h.depth.data(), h.planes(h.normal)};
     std::vector<std::uint8_t> codes(std::size_t(h.layout.planeSize));
     auto kernel = [&](DeviceBuffer<float>& out, std::uint8_t* validity) {
-        return ReprojectKernel{h.gbuffer(), previous,          objects,          2,
-                               h.planeSet(derivatives), HistoryTest{0, 10.0f, 16.0f},
-                               h.planes(history),       h.planes(out),     validity, 1};
+        return ReprojectKernel{h.gbuffer(),
+                               previous,
+                               objects,
+                               2,
+                               h.planeSet(derivatives),
+                               HistoryTest{0, 10.0f, 16.0f},
+                               h.planes(history),
+                               h.planes(out),
+                               validity,
+                               1};
     };
     h.device->launch(kernel(viaRuns, h.validity.data()), w, hgt);
     const ReprojectKernel reference = kernel(perPixel, codes.data());
@@ -401,8 +407,8 @@ TEST(Reproject, RunsOfOneObjectGiveThePerPixelResult) {
             EXPECT_NEAR(a.x, b.x, 1e-6f) << x << ", " << y;
             EXPECT_NEAR(a.z, b.z, 1e-6f) << x << ", " << y;
             EXPECT_EQ(h.validity.data()[i], codes[std::size_t(i)]) << x << ", " << y;
-            moved += h.validity.data()[i] == kReprojectionValid &&
-                     a.x != h.planes(history).load(i).x;
+            moved +=
+                h.validity.data()[i] == kReprojectionValid && a.x != h.planes(history).load(i).x;
         }
     EXPECT_GT(moved, 0);  // object 1 was sampled elsewhere: its matrices were used
 }
@@ -425,8 +431,8 @@ TEST(CpuLauncher, RunsOfOneKeyGetItKnownOthersRunPerPixel) {
     const int w = 70, h = 5;  // 4 runs of 16 and a short one per row
     std::vector<std::int32_t> keys(w * h, 3);
     std::vector<std::uint8_t> how(w * h, 0);
-    keys[2 * w + 20] = 4;   // row 2, run [16, 32): mixed
-    keys[4 * w + 66] = -1;  // row 4, the short run [64, 70): mixed
+    keys[2 * w + 20] = 4;                               // row 2, run [16, 32): mixed
+    keys[4 * w + 66] = -1;                              // row 4, the short run [64, 70): mixed
     for (int x = 32; x < 48; ++x) keys[3 * w + x] = 7;  // row 3, run [32, 48): one other key
     static_assert(KeyedRuns<RecordKeyedRuns>);
     parallelFor2D(w, h, RecordKeyedRuns{w, keys.data(), how.data()});

@@ -54,14 +54,12 @@ TEST(SvgfKernels, ModulatedIterationAlsoWritesTheResultTimesTheAlbedoInterleaved
             h.planes(albedo).store(i, make3(0.5f + next(), 0.5f + next(), 0.5f + next()));
         }
     h.ids.data()[h.layout.index(3, 4)] = -1;  // background: passes through, modulated too
-    h.device->launch(SvgfAtrousNormal128Kernel{h.gbuffer(), h.planeSet(derivatives),
-                                               h.planeSet(in), h.planeSet(plain), 2,
-                                               paperTerms()},
+    h.device->launch(SvgfAtrousNormal128Kernel{h.gbuffer(), h.planeSet(derivatives), h.planeSet(in),
+                                               h.planeSet(plain), 2, paperTerms()},
                      n, n);
     h.device->launch(SvgfAtrousNormal128ModulatedKernel{h.gbuffer(), h.planeSet(derivatives),
                                                         h.planeSet(in), h.planeSet(fused), 2,
-                                                        paperTerms(), h.planes(albedo),
-                                                        rgb.data()},
+                                                        paperTerms(), h.planes(albedo), rgb.data()},
                      n, n);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {

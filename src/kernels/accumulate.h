@@ -22,9 +22,9 @@ struct Accumulate {
     Planes3 out;
     float alpha;
     float clampK;
-    int radius;  // <= MaxRadius
-    Planes3 albedo = {};       // Modulated only
-    float* rgbOut = nullptr;   // Modulated only: interleaved, 3 floats per pixel
+    int radius;               // <= MaxRadius
+    Planes3 albedo = {};      // Modulated only
+    float* rgbOut = nullptr;  // Modulated only: interleaved, 3 floats per pixel
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;

@@ -12,33 +12,33 @@
 #include "kernels/svgf.h"
 #include "kernels/window_sums.h"
 
-#define RTD_FOR_EACH_KERNEL(X)     \
-    X(IngestKernel)                \
-    X(LuminanceRowSumsKernel)      \
-    X(LuminanceRowSumsWideKernel)  \
-    X(ColorRowSumsKernel)          \
-    X(ColorRowSumsWideKernel)      \
-    X(OutlierKernel)               \
-    X(OutlierWideKernel)           \
-    X(JbfKernel)                   \
-    X(JbfNarrowNormalKernel)       \
-    X(AtrousKernel)                \
-    X(AtrousNarrowNormalKernel)    \
-    X(AtrousModulatedKernel)       \
-    X(AtrousNarrowNormalModulatedKernel) \
-    X(GeometryDerivativesKernel)   \
-    X(ReprojectKernel)             \
-    X(AccumulateKernel)            \
-    X(AccumulateWideKernel)        \
-    X(AccumulateModulatedKernel)     \
-    X(AccumulateModulatedWideKernel) \
-    X(SvgfReprojectKernel)         \
-    X(SvgfReprojectSearchKernel)   \
-    X(SvgfAccumulateKernel)        \
-    X(SvgfVarianceKernel)          \
-    X(SvgfVarianceNormal128Kernel) \
-    X(SvgfAtrousKernel)            \
-    X(SvgfAtrousNormal128Kernel)   \
-    X(SvgfAtrousModulatedKernel)   \
+#define RTD_FOR_EACH_KERNEL(X)            \
+    X(IngestKernel)                       \
+    X(LuminanceRowSumsKernel)             \
+    X(LuminanceRowSumsWideKernel)         \
+    X(ColorRowSumsKernel)                 \
+    X(ColorRowSumsWideKernel)             \
+    X(OutlierKernel)                      \
+    X(OutlierWideKernel)                  \
+    X(JbfKernel)                          \
+    X(JbfNarrowNormalKernel)              \
+    X(AtrousKernel)                       \
+    X(AtrousNarrowNormalKernel)           \
+    X(AtrousModulatedKernel)              \
+    X(AtrousNarrowNormalModulatedKernel)  \
+    X(GeometryDerivativesKernel)          \
+    X(ReprojectKernel)                    \
+    X(AccumulateKernel)                   \
+    X(AccumulateWideKernel)               \
+    X(AccumulateModulatedKernel)          \
+    X(AccumulateModulatedWideKernel)      \
+    X(SvgfReprojectKernel)                \
+    X(SvgfReprojectSearchKernel)          \
+    X(SvgfAccumulateKernel)               \
+    X(SvgfVarianceKernel)                 \
+    X(SvgfVarianceNormal128Kernel)        \
+    X(SvgfAtrousKernel)                   \
+    X(SvgfAtrousNormal128Kernel)          \
+    X(SvgfAtrousModulatedKernel)          \
     X(SvgfAtrousNormal128ModulatedKernel) \
     X(ModulateKernel)
