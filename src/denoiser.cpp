@@ -251,6 +251,14 @@ struct Denoiser::Impl {
             {{std::move(name), std::move(inputs), std::move(outputs)}, std::move(run)});
     }
 
+    // A pass's buffer list, plus `name` when it also modulates the output (reading the albedo,
+    // writing the output).
+    static std::vector<std::string> withModulation(bool modulated, std::vector<std::string> names,
+                                                   const char* name = "albedo") {
+        if (modulated) names.push_back(name);
+        return names;
+    }
+
     // Adds the spatial filter reading `in`; its result lands in `filtered`.
     // modulateLast: the last A-Trous level also writes the output (the atrous method).
     void addSpatialPasses(SpatialFilter filter, DeviceBuffer<float>* in, const std::string& inName,
@@ -283,26 +291,21 @@ struct Denoiser::Impl {
             std::string dstName = last ? "filtered" : fmt::format("atrous{}", level);
             int stride = 1 << level;
             bool modulated = last && modulateLast;
-            std::vector<std::string> inputs = {srcName, "normal", "position", "objectId"};
-            std::vector<std::string> outputs = {dstName};
-            if (modulated) {
-                inputs.push_back("albedo");
-                outputs.push_back("output");
-            }
-            addPass(fmt::format("atrous{}", level), inputs, outputs,
+            addPass(fmt::format("atrous{}", level),
+                    withModulation(modulated, {srcName, "normal", "position", "objectId"}),
+                    withModulation(modulated, {dstName}, "output"),
                     [this, src, dst, stride, edges, modulated] {
-                        Planes3 from = planes(*src), to = planes(*dst), a = planes(albedo);
+                        auto run = [&]<class Kernel>() {
+                            launch(Kernel{gbuffer(), planes(*src), planes(*dst), stride, edges,
+                                          planes(albedo), outputTarget});
+                        };
                         bool narrow = oppositeNormalsVanish(edges);  // no square root per tap
-                        if (modulated && narrow)
-                            launch(AtrousNarrowNormalModulatedKernel{gbuffer(), from, to, stride,
-                                                                     edges, a, outputTarget});
-                        else if (modulated)
-                            launch(AtrousModulatedKernel{gbuffer(), from, to, stride, edges, a,
-                                                         outputTarget});
-                        else if (narrow)
-                            launch(AtrousNarrowNormalKernel{gbuffer(), from, to, stride, edges});
+                        if (modulated)
+                            narrow ? run.template operator()<AtrousNarrowNormalModulatedKernel>()
+                                   : run.template operator()<AtrousModulatedKernel>();
                         else
-                            launch(AtrousKernel{gbuffer(), from, to, stride, edges});
+                            narrow ? run.template operator()<AtrousNarrowNormalKernel>()
+                                   : run.template operator()<AtrousKernel>();
                     });
             src = dst;
             srcName = dstName;
@@ -433,30 +436,24 @@ struct Denoiser::Impl {
             // The last iteration modulates too: the result goes out from registers, not read
             // back by a modulate pass.
             bool last = it == sv.iterations - 1;
-            std::vector<std::string> inputs = {slotName(src), "normal", "depth", "derivatives"};
-            std::vector<std::string> outputs = {slotName(dst)};
-            if (last) {
-                inputs.push_back("albedo");
-                outputs.push_back("output");
-            }
-            addPass(
-                fmt::format("svgf-atrous{}", it), inputs, outputs,
-                [this, terms, stride, src, dst, last] {
-                    PlaneSet from = planeSet(slot(src)), to = planeSet(slot(dst));
-                    PlaneSet d = planeSet(derivatives);
-                    Planes3 a = planes(albedo);
-                    bool squarings = normalFactorBySquarings(terms);  // no logarithm per tap
-                    if (last && squarings)
-                        launch(SvgfAtrousNormal128ModulatedKernel{gbuffer(), d, from, to, stride,
-                                                                  terms, a, outputTarget});
-                    else if (last)
-                        launch(SvgfAtrousModulatedKernel{gbuffer(), d, from, to, stride, terms, a,
-                                                         outputTarget});
-                    else if (squarings)
-                        launch(SvgfAtrousNormal128Kernel{gbuffer(), d, from, to, stride, terms});
-                    else
-                        launch(SvgfAtrousKernel{gbuffer(), d, from, to, stride, terms});
-                });
+            addPass(fmt::format("svgf-atrous{}", it),
+                    withModulation(last, {slotName(src), "normal", "depth", "derivatives"}),
+                    withModulation(last, {slotName(dst)}, "output"),
+                    [this, terms, stride, src, dst, last] {
+                        auto run = [&]<class Kernel>() {
+                            launch(Kernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
+                                          planeSet(slot(dst)), stride, terms, planes(albedo),
+                                          outputTarget});
+                        };
+                        bool squarings = normalFactorBySquarings(terms);  // no logarithm per tap
+                        if (last)
+                            squarings
+                                ? run.template operator()<SvgfAtrousNormal128ModulatedKernel>()
+                                : run.template operator()<SvgfAtrousModulatedKernel>();
+                        else
+                            squarings ? run.template operator()<SvgfAtrousNormal128Kernel>()
+                                      : run.template operator()<SvgfAtrousKernel>();
+                    });
             src = dst;
         }
     }

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "devices/device.h"
 
@@ -89,6 +90,28 @@ struct Harness {
     }
     GBufferView gbuffer() const {
         return {layout, planes(normal), planes(position), depth.data(), ids.data()};
+    }
+    // Every pixel of `p` from `next`: values in [offset, offset + 1).
+    void fillRandom(const Planes3& p, UnitRandom& next, float offset = 0.0f) const {
+        for (int y = 0; y < layout.height; ++y)
+            for (int x = 0; x < layout.width; ++x) {
+                float r = next(), g = next(), b = next();
+                p.store(layout.index(x, y), make3(offset + r, offset + g, offset + b));
+            }
+    }
+    // The caller's interleaved RGB as a modulated kernel wrote it: its result planes times the
+    // albedo, at every pixel.
+    void expectModulatedOutput(const Planes3& result, const Planes3& albedo,
+                               const std::vector<float>& rgb) const {
+        for (int y = 0; y < layout.height; ++y)
+            for (int x = 0; x < layout.width; ++x) {
+                auto i = layout.index(x, y);
+                Float3 f = result.load(i), a = albedo.load(i);
+                const float* out = &rgb[std::size_t(3 * (y * layout.width + x))];
+                EXPECT_FLOAT_EQ(out[0], f.x * a.x) << x << ", " << y;
+                EXPECT_FLOAT_EQ(out[1], f.y * a.y) << x << ", " << y;
+                EXPECT_FLOAT_EQ(out[2], f.z * a.z) << x << ", " << y;
+            }
     }
     void setAll(const DeviceBuffer<float>& buffer, Float3 v) {
         for (int y = 0; y < layout.height; ++y)

@@ -54,53 +54,54 @@ concept KeyedRuns = requires(const Kernel& k) {
     k.template pixel<true>(0, 0, std::int32_t(0));
 };
 
-// One row of [x0, x1): scalar, block-sparse or vectorised, as the kernel declares.
+// The pixel loops' vectorisation: `omp simd` on every instruction-set copy but the scalar one
+// (the baseline speed-ups are measured against).
+#define RTD_PRAGMA(x) _Pragma(#x)
+#if defined(RTD_CPU_SCALAR)
+#define RTD_CPU_SIMD
+#define RTD_CPU_SIMD_OR(flag)
+#else
+#define RTD_CPU_SIMD RTD_PRAGMA(omp simd)
+#define RTD_CPU_SIMD_OR(flag) RTD_PRAGMA(omp simd reduction(| : flag))
+#endif
+
+// Whether pred(x) holds for some x in [x0, x1), tested vectorised.
+template <class Pred>
+RTD_INLINE bool anyInRun(int x0, int x1, Pred pred) {
+    int any = 0;
+    RTD_CPU_SIMD_OR(any)
+    for (int x = x0; x < x1; ++x) any |= pred(x) ? 1 : 0;
+    return any != 0;
+}
+
+// One row of [x0, x1): scalar, block-sparse, keyed or vectorised, as the kernel declares.
 template <class Kernel>
 RTD_INLINE void runRow(const Kernel& kernel, int x0, int x1, int y) {
-    if constexpr (KeyedRuns<Kernel> && !isSparse<Kernel>()) {
-        for (int b0 = x0; b0 < x1; b0 += kSparseBlock) {
-            int b1 = b0 + kSparseBlock < x1 ? b0 + kSparseBlock : x1;
-            const std::int32_t key = kernel.runKey(b0, y);
-            int mixed = 0;
-#if !defined(RTD_CPU_SCALAR)
-#pragma omp simd reduction(| : mixed)
-#endif
-            for (int x = b0; x < b1; ++x) mixed |= kernel.runKey(x, y) != key ? 1 : 0;
-            if (mixed) {
-#if !defined(RTD_CPU_SCALAR)
-#pragma omp simd
-#endif
-                for (int x = b0; x < b1; ++x) kernel.template pixel<false>(x, y, 0);
-            } else {
-#if !defined(RTD_CPU_SCALAR)
-#pragma omp simd
-#endif
-                for (int x = b0; x < b1; ++x) kernel.template pixel<true>(x, y, key);
-            }
-        }
-    } else if constexpr (isSparse<Kernel>()) {
+    if constexpr (isSparse<Kernel>()) {
 #if defined(__clang__)
 #pragma clang loop vectorize(disable)
 #endif
         for (int x = x0; x < x1; ++x) kernel(x, y);
-    } else if constexpr (BlockSparse<Kernel>) {
+    } else if constexpr (KeyedRuns<Kernel> || BlockSparse<Kernel>) {
         for (int b0 = x0; b0 < x1; b0 += kSparseBlock) {
             int b1 = b0 + kSparseBlock < x1 ? b0 + kSparseBlock : x1;
-            int active = 0;
-#if !defined(RTD_CPU_SCALAR)
-#pragma omp simd reduction(| : active)
-#endif
-            for (int x = b0; x < b1; ++x) active |= kernel.active(x, y) ? 1 : 0;
-            if (!active) continue;
-#if !defined(RTD_CPU_SCALAR)
-#pragma omp simd
-#endif
-            for (int x = b0; x < b1; ++x) kernel(x, y);
+            if constexpr (KeyedRuns<Kernel>) {
+                const std::int32_t key = kernel.runKey(b0, y);
+                if (anyInRun(b0, b1, [&](int x) { return kernel.runKey(x, y) != key; })) {
+                    RTD_CPU_SIMD
+                    for (int x = b0; x < b1; ++x) kernel.template pixel<false>(x, y, 0);
+                } else {
+                    RTD_CPU_SIMD
+                    for (int x = b0; x < b1; ++x) kernel.template pixel<true>(x, y, key);
+                }
+            } else {
+                if (!anyInRun(b0, b1, [&](int x) { return kernel.active(x, y); })) continue;
+                RTD_CPU_SIMD
+                for (int x = b0; x < b1; ++x) kernel(x, y);
+            }
         }
     } else {
-#if !defined(RTD_CPU_SCALAR)
-#pragma omp simd
-#endif
+        RTD_CPU_SIMD
         for (int x = x0; x < x1; ++x) kernel(x, y);
     }
 }
