@@ -3,6 +3,8 @@
 #include <cuda_runtime.h>
 
 #include <string>
+#include <type_traits>
+#include <utility>
 
 #include "devices/device.h"
 #include "rtdenoise/error.h"
@@ -16,19 +18,50 @@ void check(cudaError_t status, const char* what) {
                     std::string("cuda: ") + what + ": " + cudaGetErrorString(status));
 }
 
-// 32 x 8 threads, at least 3 blocks per SM: the register cap (85) that leaves room for 3 blocks.
-// Unbounded, the fully unrolled 5x5 filters took up to 255 registers (12% occupancy); measured
-// on an H100 at 1080p against 32x8 unbounded, 16x16 and 32x4 x 8 blocks (64 registers), this was
-// the fastest or within 2% for every method (svgf 1.70 -> 1.27 ms per frame with the
-// approximate division and square root of core/math.h).
-constexpr int kBlockX = 32, kBlockY = 8, kMinBlocksPerSm = 3;
+// Blocks of 128 threads. The register budget is set per kernel by __launch_bounds__'s minimum of
+// resident blocks per SM: 6 (the default) caps a thread at 85 registers, 5 at 102, 4 at 128.
+// Unbounded, the fully unrolled 5x5 filters took up to 255 registers (1 block per SM). Measured on
+// an H100 at 1080p (bench --size 1920x1080), each kernel against 256-thread blocks of 85 and 128
+// registers and 128-thread blocks of 73-128:
+// - the default, 85 (as 3 blocks of 256 were): JBF, reprojection, accumulation and the small
+//   passes, which the cap does not make spill; the accumulations 7% faster than with 256 threads;
+// - 128 for the A-Trous iterations, whose unrolled taps in +/- pairs spill under 85 (up to 132
+//   bytes per thread): 0.196-0.242 -> 0.176-0.195 ms;
+// - 102 for SVGF's A-Trous iterations and its variance (which spilled 1 KB per thread under 85):
+//   0.131-0.165 -> 0.123-0.140 ms, the variance 0.108 -> 0.058.
+constexpr int kThreadsPerBlock = 128;
+template <class Kernel>
+inline constexpr int kMinBlocksPerSm = 6;
+template <bool NarrowNormal, bool Modulated>
+inline constexpr int kMinBlocksPerSm<Atrous<NarrowNormal, Modulated>> = 4;
+template <int NormalSquarings, bool Modulated>
+inline constexpr int kMinBlocksPerSm<SvgfAtrous<NormalSquarings, Modulated>> = 5;
+template <int NormalSquarings>
+inline constexpr int kMinBlocksPerSm<SvgfVariance<NormalSquarings>> = 5;
 
 template <class Kernel>
-__global__ void __launch_bounds__(kBlockX* kBlockY, kMinBlocksPerSm)
+__global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
     runKernel2D(Kernel kernel, int width, int height) {
     int x = int(blockIdx.x * blockDim.x + threadIdx.x);
     int y = int(blockIdx.y * blockDim.y + threadIdx.y);
     if (x < width && y < height) kernel(x, y);
+}
+
+// Block shape: 32 x 4, or 64 x 2 for the A-Trous iterations whose taps are 8 or more rows apart
+// (tapRowStride(), which the CPU launcher reads too): a block then fetches half as many distinct
+// rows. Iterations at strides 8 and 16 ran 2-6% faster so (H100, 1080p), those at 1-4 slower.
+template <class Kernel, class = void>
+struct TapRowStride {
+    static int of(const Kernel&) { return 1; }
+};
+template <class Kernel>
+struct TapRowStride<Kernel, std::void_t<decltype(std::declval<const Kernel&>().tapRowStride())>> {
+    static int of(const Kernel& kernel) { return kernel.tapRowStride(); }
+};
+template <class Kernel>
+dim3 blockShape(const Kernel& kernel) {
+    int x = TapRowStride<Kernel>::of(kernel) >= 8 ? 64 : 32;
+    return dim3(x, kThreadsPerBlock / x);
 }
 
 // totals[0]: values replaced (flag bits 0-1); totals[1]: pixels with a bad ID (bit 2).
@@ -157,7 +190,7 @@ class CudaDevice final : public Device {
 
 #define RTD_DEFINE_LAUNCH(K)                                                          \
     void launch(const K& kernel, int width, int height) override {                    \
-        dim3 block(kBlockX, kBlockY);                                                 \
+        dim3 block = blockShape(kernel);                                              \
         dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y); \
         runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);              \
         check(cudaGetLastError(), #K);                                                \
