@@ -22,9 +22,15 @@ struct Atrous {
     // The rows it reads are `stride` apart (the CPU launcher's row order, parallel_for.h).
     RTD_HOST_DEVICE int tapRowStride() const { return stride; }
 
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { filter<0>(x, y); }
+
     // Branch-free body (border and background taps get weight 0) so the CPU launcher can
     // vectorise across neighbouring pixels: their taps are neighbours too (contiguous loads).
-    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+    // FixedStride > 0: the stride as a compile-time constant (the CUDA launcher's choice for
+    // some strides): the taps' column offsets then become immediate operands of the GPU's loads.
+    template <int FixedStride>
+    RTD_HOST_DEVICE RTD_INLINE void filter(int x, int y) const {
+        const int step = FixedStride > 0 ? FixedStride : stride;
         // log2 of the B3 spline's taps 1/16, 1/4, 3/8, 1/4, 1/16.
         constexpr float kLog2B3[5] = {-4.0f, -2.0f, -1.4150375f, -2.0f, -4.0f};
         const Layout& L = g.layout;
@@ -47,7 +53,7 @@ struct Atrous {
         RTD_UNROLL
         for (int pair = 0; pair < 12; ++pair) {
             int tx = pair % 5, ty = pair / 5;  // the taps before the centre, raster order
-            PixelIndex o = L.offset((tx - 2) * stride, (ty - 2) * stride);
+            PixelIndex o = L.offset((tx - 2) * step, (ty - 2) * step);
             PixelIndex ja = i + o, jb = i - o;
             Float3 ca = in.load(ja), cb = in.load(jb);
             EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(

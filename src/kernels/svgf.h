@@ -325,7 +325,12 @@ struct SvgfAtrous {
     // The rows it reads are `stride` apart (the CPU launcher's row order, parallel_for.h).
     RTD_HOST_DEVICE int tapRowStride() const { return stride; }
 
-    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { filter<0>(x, y); }
+
+    // FixedStride > 0: the stride as a compile-time constant (as in Atrous::filter).
+    template <int FixedStride>
+    RTD_HOST_DEVICE RTD_INLINE void filter(int x, int y) const {
+        const int step = FixedStride > 0 ? FixedStride : stride;
         constexpr float kB3[3] = {0.375f, 0.25f, 0.0625f};         // by |tap offset| / stride
         constexpr float kLog2B3[3] = {-1.4150375f, -2.0f, -4.0f};  // log2 kB3: in the exponent
         constexpr float kGauss[2] = {0.25f, 0.125f};  // 3x3: 1/4 centre, 1/8 edges, 1/16 corners
@@ -355,8 +360,8 @@ struct SvgfAtrous {
             kLog2e /
                 (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f)};
         // The depth change over one tap step.
-        float stepX = derivatives.at(0, i) * float(stride);
-        float stepY = derivatives.at(1, i) * float(stride);
+        float stepX = derivatives.at(0, i) * float(step);
+        float stepY = derivatives.at(1, i) * float(step);
         // The centre: weight 1 (no depth, luminance or normal difference) times its kernel value.
         constexpr float kCentre = kB3[0] * kB3[0];
         Float3 sum = cI * kCentre;
@@ -368,7 +373,7 @@ struct SvgfAtrous {
             int ax = pair % 5 - 2, ay = pair / 5 - 2;  // the taps before the centre, raster order
             float log2Kernel = kLog2B3[ax < 0 ? -ax : ax] + kLog2B3[ay < 0 ? -ay : ay];
             float depthScale = svgfDepthScale(terms, stepX * float(ax) + stepY * float(ay));
-            PixelIndex o = L.offset(ax * stride, ay * stride);
+            PixelIndex o = L.offset(ax * step, ay * step);
             RTD_UNROLL
             for (int side = 0; side < 2; ++side) {
                 PixelIndex j = side == 0 ? i + o : i - o;

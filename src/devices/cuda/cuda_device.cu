@@ -47,6 +47,27 @@ __global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
     if (x < width && y < height) kernel(x, y);
 }
 
+// The A-Trous iterations with their stride as a compile-time constant (Kernel::filter<Stride>):
+// each tap row then needs one address per plane, its five taps' loads taking their column
+// offsets as immediates (the iteration's integer multiply-adds 247-261 -> 65-74 per thread).
+// Used where it was faster on the H100 at 1080p (3 runs, medians): the course's A-Trous at
+// strides 1-8 (0.176, 0.178, 0.182, 0.182 -> 0.147, 0.159, 0.176, 0.175 ms; at 16 mixed), SVGF's
+// at stride 1 (0.125 -> 0.119; 0.129-0.148 -> 0.149-0.172 at 2-16, for reasons not found).
+template <class Kernel>
+inline constexpr int kFixedStridesUpTo = 0;
+template <bool NarrowNormal, bool Modulated>
+inline constexpr int kFixedStridesUpTo<Atrous<NarrowNormal, Modulated>> = 8;
+template <int NormalSquarings, bool Modulated>
+inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated>> = 1;
+
+template <class Kernel, int Stride>
+__global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
+    runFixedStride2D(Kernel kernel, int width, int height) {
+    int x = int(blockIdx.x * blockDim.x + threadIdx.x);
+    int y = int(blockIdx.y * blockDim.y + threadIdx.y);
+    if (x < width && y < height) kernel.template filter<Stride>(x, y);
+}
+
 // Block shape: 32 x 4, or 64 x 2 for the A-Trous iterations whose taps are 8 or more rows apart
 // (tapRowStride(), which the CPU launcher reads too): a block then fetches half as many distinct
 // rows. Iterations at strides 8 and 16 ran 2-6% faster so (H100, 1080p), those at 1-4 slower.
@@ -192,13 +213,34 @@ class CudaDevice final : public Device {
     void launch(const K& kernel, int width, int height) override {                    \
         dim3 block = blockShape(kernel);                                              \
         dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y); \
-        runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);              \
+        launchOn(kernel, grid, block, width, height);                                 \
         check(cudaGetLastError(), #K);                                                \
     }
     RTD_FOR_EACH_KERNEL(RTD_DEFINE_LAUNCH)
 #undef RTD_DEFINE_LAUNCH
 
   private:
+    // The fixed-stride instantiation for this launch's stride, or null.
+    template <class Kernel, int Stride = 1>
+    static auto fixedStrideKernel(int stride) -> void (*)(Kernel, int, int) {
+        if constexpr (Stride > kFixedStridesUpTo<Kernel>) {
+            return nullptr;
+        } else {
+            return stride == Stride ? runFixedStride2D<Kernel, Stride>
+                                    : fixedStrideKernel<Kernel, 2 * Stride>(stride);
+        }
+    }
+    template <class Kernel>
+    void launchOn(const Kernel& kernel, dim3 grid, dim3 block, int width, int height) {
+        if constexpr (kFixedStridesUpTo < Kernel >> 0) {
+            if (auto fixed = fixedStrideKernel<Kernel>(kernel.tapRowStride())) {
+                fixed<<<grid, block, 0, stream_>>>(kernel, width, height);
+                return;
+            }
+        }
+        runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);
+    }
+
     static constexpr std::size_t kStageChunk = std::size_t(8) << 20;
     static constexpr int kStageSlots = 3;
 
