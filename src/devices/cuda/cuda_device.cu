@@ -52,7 +52,7 @@ __global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
 // offsets as immediates (the iteration's integer multiply-adds 247-261 -> 65-74 per thread).
 // Used where it was faster on the H100 at 1080p (3 runs, medians): the course's A-Trous at
 // strides 1-8 (0.176, 0.178, 0.182, 0.182 -> 0.147, 0.159, 0.176, 0.175 ms; at 16 mixed), SVGF's
-// at stride 1 (0.125 -> 0.119; 0.129-0.148 -> 0.149-0.172 at 2-16, for reasons not found).
+// at stride 1 (0.125 -> 0.119 ms; at strides 2-16 2-19% slower, for a reason not found).
 template <class Kernel>
 inline constexpr int kFixedStridesUpTo = 0;
 template <bool NarrowNormal, bool Modulated>
@@ -232,7 +232,8 @@ class CudaDevice final : public Device {
     }
     template <class Kernel>
     void launchOn(const Kernel& kernel, dim3 grid, dim3 block, int width, int height) {
-        if constexpr (kFixedStridesUpTo < Kernel >> 0) {
+        constexpr bool kHasFixedStrides = 0 < kFixedStridesUpTo<Kernel>;
+        if constexpr (kHasFixedStrides) {
             if (auto fixed = fixedStrideKernel<Kernel>(kernel.tapRowStride())) {
                 fixed<<<grid, block, 0, stream_>>>(kernel, width, height);
                 return;
