@@ -51,7 +51,7 @@ class Denoiser {
     void processFrame(const Frame& frame, Image& output);
     // The same from buffers the caller owns, host or (on a GPU device) device memory;
     // `outputRgb` (width * height interleaved RGB floats) is in the same memory space. Sizes
-    // are the caller's to get right; IDs are checked only for host memory.
+    // are the caller's to get right; IDs are checked in either space (the ingest flags them).
     void processFrame(const FrameView& frame, float* outputRgb);
 
     // Forgets the history (e.g. at a camera cut).
