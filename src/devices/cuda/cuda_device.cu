@@ -49,19 +49,30 @@ __global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
 
 // The A-Trous iterations with their stride as a compile-time constant (Kernel::filter<Stride>):
 // each tap row then needs one address per plane, its five taps' loads taking their column
-// offsets as immediates (the iteration's integer multiply-adds 247-261 -> 65-74 per thread).
-// Used where it was faster on the H100 at 1080p (3 runs, medians): the course's A-Trous at
-// strides 1-8 (0.176, 0.178, 0.182, 0.182 -> 0.147, 0.159, 0.176, 0.175 ms; at 16 mixed), SVGF's
-// at stride 1 (0.125 -> 0.119 ms; at strides 2-16 2-19% slower, for a reason not found).
+// offsets as immediates (the iteration's integer multiply-adds 247-261 -> 65-74 per thread). With
+// the budget of the runtime-stride kernels they stalled longer on their loads (SVGF's at stride 4:
+// 13% fewer instructions, 14% slower); with more registers they are faster. Measured on the H100
+// at 1080p (2-3 runs, medians), against the runtime stride:
+// - the course's A-Trous at strides 1-8, 170 registers: 0.176, 0.178, 0.182, 0.182 -> 0.156,
+//   0.156, 0.163, 0.159 ms (128 registers: 0.147, 0.159, 0.176, 0.175);
+// - SVGF's at strides 1-16, 128 registers: 0.125, 0.126, 0.129, 0.130, 0.148 -> 0.108, 0.112,
+//   0.120, 0.114, 0.137 ms (102 registers: 0.119 at stride 1, 2-19% slower at 2-16).
 template <class Kernel>
 inline constexpr int kFixedStridesUpTo = 0;
 template <bool NarrowNormal, bool Modulated>
 inline constexpr int kFixedStridesUpTo<Atrous<NarrowNormal, Modulated>> = 8;
 template <int NormalSquarings, bool Modulated>
-inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated>> = 1;
+inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated>> = 16;
+// Their register budget, as kMinBlocksPerSm: 3 blocks of 128 threads allow 170 registers, 4 128.
+template <class Kernel>
+inline constexpr int kFixedStrideMinBlocksPerSm = kMinBlocksPerSm<Kernel>;
+template <bool NarrowNormal, bool Modulated>
+inline constexpr int kFixedStrideMinBlocksPerSm<Atrous<NarrowNormal, Modulated>> = 3;
+template <int NormalSquarings, bool Modulated>
+inline constexpr int kFixedStrideMinBlocksPerSm<SvgfAtrous<NormalSquarings, Modulated>> = 4;
 
 template <class Kernel, int Stride>
-__global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
+__global__ void __launch_bounds__(kThreadsPerBlock, kFixedStrideMinBlocksPerSm<Kernel>)
     runFixedStride2D(Kernel kernel, int width, int height) {
     int x = int(blockIdx.x * blockDim.x + threadIdx.x);
     int y = int(blockIdx.y * blockDim.y + threadIdx.y);
