@@ -10,7 +10,6 @@
 
 namespace rtd {
 
-// Padded planar buffers for a w x h image, as the Denoiser lays them out.
 // A small deterministic generator of floats in [0, 1) (a linear congruential generator), the
 // same sequence on every platform.
 struct UnitRandom {
@@ -21,6 +20,7 @@ struct UnitRandom {
     }
 };
 
+// Padded planar buffers for a w x h image, as the Denoiser lays them out.
 struct Harness {
     // A flat wall facing the camera (normal -z, z = 5), one object, everything else 0.
     std::unique_ptr<Device> device = createCpuDevice();

@@ -2,6 +2,9 @@
 // src/kernels/, add it here; each back end instantiates its launcher from this list.
 #pragma once
 
+#include <type_traits>
+#include <utility>
+
 #include "kernels/accumulate.h"
 #include "kernels/atrous.h"
 #include "kernels/ingest.h"
@@ -11,6 +14,20 @@
 #include "kernels/reproject.h"
 #include "kernels/svgf.h"
 #include "kernels/window_sums.h"
+
+namespace rtd {
+
+// A kernel with `int tapRowStride() const` reads rows y + k * stride, |k| <= 2 (an A-Trous
+// level); launchers order or shape their work by it. In C++17 form: the CUDA back end's
+// translation unit is C++17.
+template <class Kernel, class = void>
+inline constexpr bool kHasTapRowStride = false;
+template <class Kernel>
+inline constexpr bool
+    kHasTapRowStride<Kernel, std::void_t<decltype(std::declval<const Kernel&>().tapRowStride())>> =
+        true;
+
+}  // namespace rtd
 
 #define RTD_FOR_EACH_KERNEL(X)            \
     X(IngestKernel)                       \

@@ -61,6 +61,15 @@ RTD_HOST_DEVICE RTD_INLINE void loadTaps(const T* plane, const HistoryTaps<Taps>
     }
 }
 
+// Three planes' values at the taps (a colour, a normal).
+template <int Taps>
+RTD_HOST_DEVICE RTD_INLINE void loadTaps(const Planes3& planes, const HistoryTaps<Taps>& taps,
+                                         float (&x)[Taps], float (&y)[Taps], float (&z)[Taps]) {
+    loadTaps(planes.data, taps, x);
+    loadTaps(planes.data + planes.planeSize, taps, y);
+    loadTaps(planes.data + 2 * planes.planeSize, taps, z);
+}
+
 // Locates pixel i's history. `derivatives`: planes dz/dx, dz/dy, fwidth(n) of the current frame.
 // Search3x3: when all four bilinear taps fail the history test, average the 3x3 taps that pass.
 // Branch-free: every test yields a mask, and a pixel that fails one still computes the rest on
@@ -116,9 +125,7 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     float previousDepth[kTaps], previousNx[kTaps], previousNy[kTaps], previousNz[kTaps];
     loadTaps(previous.objectId, taps, previousId);
     loadTaps(previous.depth, taps, previousDepth);
-    loadTaps(previous.normal.data, taps, previousNx);
-    loadTaps(previous.normal.data + previous.normal.planeSize, taps, previousNy);
-    loadTaps(previous.normal.data + 2 * previous.normal.planeSize, taps, previousNz);
+    loadTaps(previous.normal, taps, previousNx, previousNy, previousNz);
     bool accepted[kTaps];
     float bilinearSum = 0.0f, acceptedCount = 0.0f;
     RTD_UNROLL
@@ -218,9 +225,7 @@ struct ReprojectKernel {
                                                 test, hasHistory, id);
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps];
-        loadTaps(history.data, taps, r);
-        loadTaps(history.data + history.planeSize, taps, gr);
-        loadTaps(history.data + 2 * history.planeSize, taps, b);
+        loadTaps(history, taps, r, gr, b);
         Float3 sum;  // 0 where invalid: every weight is 0
         RTD_UNROLL
         for (int t = 0; t < kTaps; ++t) sum += make3(r[t], gr[t], b[t]) * taps.weight[t];

@@ -129,9 +129,7 @@ struct SvgfReproject {
         validity[i] = taps.code;
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps], means[kTaps], variances[kTaps], lengths[kTaps];
-        loadTaps(previousIllumination.data, taps, r);
-        loadTaps(&previousIllumination.at(1, 0), taps, gr);
-        loadTaps(&previousIllumination.at(2, 0), taps, b);
+        loadTaps(previousIllumination.rgb(), taps, r, gr, b);
         loadTaps(previousMoments.data, taps, means);
         loadTaps(&previousMoments.at(1, 0), taps, variances);
         loadTaps(previousLength, taps, lengths);

@@ -5,6 +5,7 @@
 #include <concepts>
 
 #include "core/host_device.h"
+#include "kernels/kernel_list.h"
 
 #if defined(__SSE__)
 #include <xmmintrin.h>
@@ -106,17 +107,13 @@ RTD_INLINE void runRow(const Kernel& kernel, int x0, int x1, int y) {
     }
 }
 
-// A kernel with `int tapRowStride() const` reads rows y + k * stride, |k| <= 2 (an A-Trous
-// level). In plain order a row it reads is read again over the next 4 * stride rows, which at
-// wide strides no longer fit a core's L2 cache (strides 8 and 16 at 1080p, 4 to 16 at 4K),
-// so there (interleaveRows) the rows are visited in classes of equal y mod stride: y = r,
+// A kernel with tapRowStride() (kHasTapRowStride, kernel_list.h) reads rows y + k * stride,
+// |k| <= 2 (an A-Trous level). In plain order a row it reads is read again over the next 4 * stride
+// rows, which at wide strides no longer fit a core's L2 cache (strides 8 and 16 at 1080p, 4 to 16
+// at 4K), so there (interleaveRows) the rows are visited in classes of equal y mod stride: y = r,
 // r + stride, ..., for r = 0 .. stride - 1. Consecutive rows visited then share 4 of their 5 input
 // rows. At narrower strides plain order is faster: its reads are continuous streams for the
 // hardware prefetchers.
-template <class Kernel>
-concept TapRowStrided = requires(const Kernel& k) {
-    { k.tapRowStride() } -> std::convertible_to<int>;
-};
 // Interleave when the rows read over 4 * stride rows (about 9 planes of floats: colour, variance,
 // depth, normal, ID) exceed a core's L2 (2 MiB on this machine's Sapphire Rapids class cores).
 constexpr long kL2CacheBytes = 2L << 20;
@@ -154,7 +151,7 @@ void parallelRows(int width, int height, const Kernel& kernel, RowOf rowOf) {
 
 template <class Kernel>
 void parallelFor2D(int width, int height, const Kernel& kernel) {
-    if constexpr (TapRowStrided<Kernel>) {
+    if constexpr (kHasTapRowStride<Kernel>) {
         int stride = kernel.tapRowStride();
         if (stride > 1 && stride < height && interleaveRows(stride, width))
             return parallelRows(width, height, kernel,

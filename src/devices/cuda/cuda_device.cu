@@ -3,8 +3,6 @@
 #include <cuda_runtime.h>
 
 #include <string>
-#include <type_traits>
-#include <utility>
 
 #include "devices/device.h"
 #include "rtdenoise/error.h"
@@ -39,14 +37,6 @@ inline constexpr int kMinBlocksPerSm<SvgfAtrous<NormalSquarings, Modulated>> = 5
 template <int NormalSquarings>
 inline constexpr int kMinBlocksPerSm<SvgfVariance<NormalSquarings>> = 5;
 
-template <class Kernel>
-__global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
-    runKernel2D(Kernel kernel, int width, int height) {
-    int x = int(blockIdx.x * blockDim.x + threadIdx.x);
-    int y = int(blockIdx.y * blockDim.y + threadIdx.y);
-    if (x < width && y < height) kernel(x, y);
-}
-
 // The A-Trous iterations with their stride as a compile-time constant (Kernel::filter<Stride>):
 // each tap row then needs one address per plane, its five taps' loads taking their column
 // offsets as immediates (the iteration's integer multiply-adds 247-261 -> 65-74 per thread). With
@@ -57,42 +47,41 @@ __global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
 //   0.156, 0.163, 0.159 ms (128 registers: 0.147, 0.159, 0.176, 0.175);
 // - SVGF's at strides 1-16, 128 registers: 0.125, 0.126, 0.129, 0.130, 0.148 -> 0.108, 0.112,
 //   0.120, 0.114, 0.137 ms (102 registers: 0.119 at stride 1, 2-19% slower at 2-16).
+template <class Kernel, int Stride>
+struct FixedStride {
+    Kernel kernel;
+    __device__ __forceinline__ void operator()(int x, int y) const {
+        kernel.template filter<Stride>(x, y);
+    }
+};
 template <class Kernel>
 inline constexpr int kFixedStridesUpTo = 0;
 template <bool NarrowNormal, bool Modulated>
 inline constexpr int kFixedStridesUpTo<Atrous<NarrowNormal, Modulated>> = 8;
 template <int NormalSquarings, bool Modulated>
 inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated>> = 16;
-// Their register budget, as kMinBlocksPerSm: 3 blocks of 128 threads allow 170 registers, 4 128.
-template <class Kernel>
-inline constexpr int kFixedStrideMinBlocksPerSm = kMinBlocksPerSm<Kernel>;
-template <bool NarrowNormal, bool Modulated>
-inline constexpr int kFixedStrideMinBlocksPerSm<Atrous<NarrowNormal, Modulated>> = 3;
-template <int NormalSquarings, bool Modulated>
-inline constexpr int kFixedStrideMinBlocksPerSm<SvgfAtrous<NormalSquarings, Modulated>> = 4;
+// Their register budget: 3 blocks of 128 threads allow 170 registers, 4 128.
+template <bool NarrowNormal, bool Modulated, int Stride>
+inline constexpr int kMinBlocksPerSm<FixedStride<Atrous<NarrowNormal, Modulated>, Stride>> = 3;
+template <int NormalSquarings, bool Modulated, int Stride>
+inline constexpr int kMinBlocksPerSm<FixedStride<SvgfAtrous<NormalSquarings, Modulated>, Stride>> =
+    4;
 
-template <class Kernel, int Stride>
-__global__ void __launch_bounds__(kThreadsPerBlock, kFixedStrideMinBlocksPerSm<Kernel>)
-    runFixedStride2D(Kernel kernel, int width, int height) {
+template <class Kernel>
+__global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
+    runKernel2D(Kernel kernel, int width, int height) {
     int x = int(blockIdx.x * blockDim.x + threadIdx.x);
     int y = int(blockIdx.y * blockDim.y + threadIdx.y);
-    if (x < width && y < height) kernel.template filter<Stride>(x, y);
+    if (x < width && y < height) kernel(x, y);
 }
 
 // Block shape: 32 x 4, or 64 x 2 for the A-Trous iterations whose taps are 8 or more rows apart
-// (tapRowStride(), which the CPU launcher reads too): a block then fetches half as many distinct
-// rows. Iterations at strides 8 and 16 ran 2-6% faster so (H100, 1080p), those at 1-4 slower.
-template <class Kernel, class = void>
-struct TapRowStride {
-    static int of(const Kernel&) { return 1; }
-};
-template <class Kernel>
-struct TapRowStride<Kernel, std::void_t<decltype(std::declval<const Kernel&>().tapRowStride())>> {
-    static int of(const Kernel& kernel) { return kernel.tapRowStride(); }
-};
+// (tapRowStride()): a block then fetches half as many distinct rows. Iterations at strides 8 and
+// 16 ran 2-6% faster so (H100, 1080p), those at 1-4 slower.
 template <class Kernel>
 dim3 blockShape(const Kernel& kernel) {
-    int x = TapRowStride<Kernel>::of(kernel) >= 8 ? 64 : 32;
+    int x = 32;
+    if constexpr (kHasTapRowStride<Kernel>) x = kernel.tapRowStride() >= 8 ? 64 : 32;
     return dim3(x, kThreadsPerBlock / x);
 }
 
@@ -231,26 +220,18 @@ class CudaDevice final : public Device {
 #undef RTD_DEFINE_LAUNCH
 
   private:
-    // The fixed-stride instantiation for this launch's stride, or null.
+    // The kernel as FixedStride<Kernel, s> when its stride s is one of those, else as it is.
     template <class Kernel, int Stride = 1>
-    static auto fixedStrideKernel(int stride) -> void (*)(Kernel, int, int) {
-        if constexpr (Stride > kFixedStridesUpTo<Kernel>) {
-            return nullptr;
-        } else {
-            return stride == Stride ? runFixedStride2D<Kernel, Stride>
-                                    : fixedStrideKernel<Kernel, 2 * Stride>(stride);
-        }
-    }
-    template <class Kernel>
     void launchOn(const Kernel& kernel, dim3 grid, dim3 block, int width, int height) {
-        constexpr bool kHasFixedStrides = 0 < kFixedStridesUpTo<Kernel>;
-        if constexpr (kHasFixedStrides) {
-            if (auto fixed = fixedStrideKernel<Kernel>(kernel.tapRowStride())) {
-                fixed<<<grid, block, 0, stream_>>>(kernel, width, height);
-                return;
-            }
+        if constexpr (Stride <= kFixedStridesUpTo<Kernel>) {
+            if (kernel.tapRowStride() == Stride)
+                runKernel2D<<<grid, block, 0, stream_>>>(FixedStride<Kernel, Stride>{kernel}, width,
+                                                         height);
+            else
+                launchOn<Kernel, 2 * Stride>(kernel, grid, block, width, height);
+        } else {
+            runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);
         }
-        runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);
     }
 
     static constexpr std::size_t kStageChunk = std::size_t(8) << 20;
