@@ -293,7 +293,8 @@ struct Denoiser::Impl {
             bool modulated = last && modulateLast;
             addPass(fmt::format("atrous{}", level),
                     withModulation(modulated, {srcName, "normal", "position", "objectId"}),
-                    withModulation(modulated, {dstName}, "output"),
+                    modulated ? std::vector<std::string>{"output"}
+                              : std::vector<std::string>{dstName},
                     [this, src, dst, stride, edges, modulated] {
                         auto run = [&]<class Kernel>() {
                             launch(Kernel{gbuffer(), planes(*src), planes(*dst), stride, edges,
@@ -433,20 +434,23 @@ struct Denoiser::Impl {
             bool isFeedback = it == sv.feedbackIteration;
             Slot dst = isFeedback ? Slot::Feedback : (src == Slot::A ? Slot::B : Slot::A);
             int stride = 1 << it;
-            // The last iteration modulates too: the result goes out from registers, not read
-            // back by a modulate pass.
+            // The last iteration writes the output (modulated) rather than its slot: the result
+            // goes out from registers, not read back by a modulate pass. Unless it feeds the
+            // history too: then its slot is written and a modulate pass follows.
             bool last = it == sv.iterations - 1;
+            bool modulated = last && !isFeedback;
             addPass(fmt::format("svgf-atrous{}", it),
-                    withModulation(last, {slotName(src), "normal", "depth", "derivatives"}),
-                    withModulation(last, {slotName(dst)}, "output"),
-                    [this, terms, stride, src, dst, last] {
+                    withModulation(modulated, {slotName(src), "normal", "depth", "derivatives"}),
+                    modulated ? std::vector<std::string>{"output"}
+                              : std::vector<std::string>{slotName(dst)},
+                    [this, terms, stride, src, dst, modulated] {
                         auto run = [&]<class Kernel>() {
                             launch(Kernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
                                           planeSet(slot(dst)), stride, terms, planes(albedo),
                                           outputTarget});
                         };
                         bool squarings = normalFactorBySquarings(terms);  // no logarithm per tap
-                        if (last)
+                        if (modulated)
                             squarings
                                 ? run.template operator()<SvgfAtrousNormal128ModulatedKernel>()
                                 : run.template operator()<SvgfAtrousModulatedKernel>();
@@ -455,6 +459,10 @@ struct Denoiser::Impl {
                                       : run.template operator()<SvgfAtrousKernel>();
                     });
             src = dst;
+            if (last && !modulated)
+                addPass("modulate", {slotName(dst), "albedo"}, {"output"}, [this, dst] {
+                    launch(ModulateKernel{layout, planes(slot(dst)), planes(albedo), outputTarget});
+                });
         }
     }
 

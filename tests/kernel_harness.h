@@ -101,16 +101,31 @@ struct Harness {
     }
     // The caller's interleaved RGB as a modulated kernel wrote it: its result planes times the
     // albedo, at every pixel.
+    // relative: 0 for the same instantiation's result (4 ulp), else the tolerance between two
+    // instantiations (the compiler may order their sums differently).
     void expectModulatedOutput(const Planes3& result, const Planes3& albedo,
-                               const std::vector<float>& rgb) const {
+                               const std::vector<float>& rgb, float relative = 0.0f) const {
         for (int y = 0; y < layout.height; ++y)
             for (int x = 0; x < layout.width; ++x) {
                 auto i = layout.index(x, y);
                 Float3 f = result.load(i), a = albedo.load(i);
                 const float* out = &rgb[std::size_t(3 * (y * layout.width + x))];
-                EXPECT_FLOAT_EQ(out[0], f.x * a.x) << x << ", " << y;
-                EXPECT_FLOAT_EQ(out[1], f.y * a.y) << x << ", " << y;
-                EXPECT_FLOAT_EQ(out[2], f.z * a.z) << x << ", " << y;
+                const float expected[3] = {f.x * a.x, f.y * a.y, f.z * a.z};
+                for (int c = 0; c < 3; ++c) {
+                    if (relative == 0.0f)
+                        EXPECT_FLOAT_EQ(out[c], expected[c]) << x << ", " << y;
+                    else
+                        EXPECT_NEAR(out[c], expected[c], relative * std::fabs(expected[c]))
+                            << x << ", " << y;
+                }
+            }
+    }
+    // Every pixel of `buffer`'s first three planes is `v` (a kernel left them alone).
+    void expectAll(const DeviceBuffer<float>& buffer, Float3 v) const {
+        for (int y = 0; y < layout.height; ++y)
+            for (int x = 0; x < layout.width; ++x) {
+                Float3 p = planes(buffer).load(layout.index(x, y));
+                EXPECT_TRUE(p.x == v.x && p.y == v.y && p.z == v.z) << x << ", " << y;
             }
     }
     void setAll(const DeviceBuffer<float>& buffer, Float3 v) {

@@ -9,12 +9,13 @@
 
 namespace rtd {
 
-// Modulated (the atrous method's last level): also writes the result times the albedo factor
-// into the caller's interleaved RGB (ModulateKernel's job, fused: the result is not read back).
+// Modulated (the atrous method's last level): writes the result times the albedo factor into the
+// caller's interleaved RGB instead of `out` (ModulateKernel's job, fused: nothing reads the
+// last level's planes, so they are not written).
 template <bool OppositeNormalsVanish, bool Modulated = false>
 struct Atrous {
     GBufferView g;
-    Planes3 in, out;
+    Planes3 in, out;  // out: unused when Modulated
     int stride;  // 2 * stride <= layout.padding
     EdgeStoppingTerms edges;
     Planes3 albedo = {};      // Modulated only
@@ -75,8 +76,10 @@ struct Atrous {
         float keep = 1.0f - foregroundMask(idI);
         float scale = (1.0f - keep) / maxf(sumW, 1e-20f);
         Float3 result = sum * scale + ci * keep;
-        out.store(i, result);
-        if constexpr (Modulated) storeModulated(L, rgbOut, x, y, result * albedo.load(i));
+        if constexpr (Modulated)
+            storeModulated(L, rgbOut, x, y, result * albedo.load(i));
+        else
+            out.store(i, result);
     }
 };
 using AtrousKernel = Atrous<false>;  // any sigma_normal

@@ -301,14 +301,15 @@ using SvgfVarianceNormal128Kernel = SvgfVariance<kPaperNormalSquarings>;
 
 // One variance-guided A-Trous iteration: 5x5 B3-spline taps at `stride`, luminance tolerance
 // sigma_l times the 3x3-Gaussian-prefiltered standard deviation; the variance is carried with
-// squared weights, var' = sum w^2 var / (sum w)^2. Modulated (the last iteration): also writes
-// the result times the albedo factor into the caller's interleaved RGB (ModulateKernel's job,
-// fused: the result is not read back from memory).
+// squared weights, var' = sum w^2 var / (sum w)^2. Modulated (the last iteration, unless it is
+// also the feedback one): writes the result times the albedo factor into the caller's
+// interleaved RGB instead of `out` (ModulateKernel's job, fused: nothing reads the last
+// iteration's planes, so they are not written).
 template <int NormalSquarings, bool Modulated = false>
 struct SvgfAtrous {
     GBufferView g;
     PlaneSet derivatives;
-    PlaneSet in, out;  // rgb + variance
+    PlaneSet in, out;  // rgb + variance; out unused when Modulated
     int stride;
     SvgfTerms terms;
     Planes3 albedo = {};      // Modulated only
@@ -316,9 +317,12 @@ struct SvgfAtrous {
 
     RTD_HOST_DEVICE RTD_INLINE void store(int x, int y, PixelIndex i, Float3 color,
                                           float variance) const {
-        out.rgb().store(i, color);
-        out.at(3, i) = variance;
-        if constexpr (Modulated) storeModulated(g.layout, rgbOut, x, y, color * albedo.load(i));
+        if constexpr (Modulated) {
+            storeModulated(g.layout, rgbOut, x, y, color * albedo.load(i));
+        } else {
+            out.rgb().store(i, color);
+            out.at(3, i) = variance;
+        }
     }
     // The rows it reads are `stride` apart (the CPU launcher's row order, parallel_for.h).
     RTD_HOST_DEVICE int tapRowStride() const { return stride; }
