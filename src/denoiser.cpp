@@ -291,23 +291,23 @@ struct Denoiser::Impl {
             std::string dstName = last ? "filtered" : fmt::format("atrous{}", level);
             int stride = 1 << level;
             bool modulated = last && modulateLast;
-            addPass(fmt::format("atrous{}", level),
-                    withModulation(modulated, {srcName, "normal", "position", "objectId"}),
-                    modulated ? std::vector<std::string>{"output"}
-                              : std::vector<std::string>{dstName},
-                    [this, src, dst, stride, edges, modulated] {
-                        auto run = [&]<class Kernel>() {
-                            launch(Kernel{gbuffer(), planes(*src), planes(*dst), stride, edges,
-                                          planes(albedo), outputTarget});
-                        };
-                        bool narrow = oppositeNormalsVanish(edges);  // no square root per tap
-                        if (modulated)
-                            narrow ? run.template operator()<AtrousNarrowNormalModulatedKernel>()
-                                   : run.template operator()<AtrousModulatedKernel>();
-                        else
-                            narrow ? run.template operator()<AtrousNarrowNormalKernel>()
-                                   : run.template operator()<AtrousKernel>();
-                    });
+            addPass(
+                fmt::format("atrous{}", level),
+                withModulation(modulated, {srcName, "normal", "position", "objectId"}),
+                modulated ? std::vector<std::string>{"output"} : std::vector<std::string>{dstName},
+                [this, src, dst, stride, edges, modulated] {
+                    auto run = [&]<class Kernel>() {
+                        launch(Kernel{gbuffer(), planes(*src), planes(*dst), stride, edges,
+                                      planes(albedo), outputTarget});
+                    };
+                    bool narrow = oppositeNormalsVanish(edges);  // no square root per tap
+                    if (modulated)
+                        narrow ? run.template operator()<AtrousNarrowNormalModulatedKernel>()
+                               : run.template operator()<AtrousModulatedKernel>();
+                    else
+                        narrow ? run.template operator()<AtrousNarrowNormalKernel>()
+                               : run.template operator()<AtrousKernel>();
+                });
             src = dst;
             srcName = dstName;
         }

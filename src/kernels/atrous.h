@@ -16,7 +16,7 @@ template <bool OppositeNormalsVanish, bool Modulated = false>
 struct Atrous {
     GBufferView g;
     Planes3 in, out;  // out: unused when Modulated
-    int stride;  // 2 * stride <= layout.padding
+    int stride;       // 2 * stride <= layout.padding
     EdgeStoppingTerms edges;
     Planes3 albedo = {};      // Modulated only
     float* rgbOut = nullptr;  // Modulated only: interleaved, 3 floats per pixel
