@@ -77,23 +77,30 @@ RTD_HOST_DEVICE RTD_INLINE bool isFinite(float v) {
 
 constexpr float kLog2e = 1.44269504f;
 
-// 2^t for t <= 0 (the filters' weights, with their exponents in base 2): 2^floor(t) p(frac(t)),
-// p a degree-5 near-minimax fit of 2^f on [0,1) with p(0) = 1 (relative error 8e-8). Results
-// under 2^-126 flush to 0. GPU: its exp2 instruction (2 ulp).
+// 2^t for t <= 0 (the filters' weights, with their exponents in base 2): 2^n p(t - n) with n the
+// nearest integer to t and p a degree-5 near-minimax fit of 2^f on [-1/2, 1/2] with p(0) = 1
+// (relative error 9e-8). n comes from rounding t + 1.5 * 2^23 + 127, whose low mantissa bits are
+// then n + 127: shifted into the exponent field they make 2^n, with no conversion to an integer.
+// Results under 2^-126 flush to 0. GPU: its exp2 instruction (2 ulp).
 RTD_HOST_DEVICE RTD_INLINE float exp2Negative(float t) {
 #if defined(__CUDA_ARCH__)
     return exp2f(t);
 #else
+    // (t + c) - c must stay a rounding, not be simplified to t.
+    RTD_NO_REASSOCIATION
+    constexpr float kRoundingBias = 12583039.0f;  // 1.5 * 2^23 + 127
     t = maxf(t, -126.0f);
-    float whole = std::floor(t);
-    float f = t - whole;
-    float p = 1.86713060e-3f;
-    p = p * f + 9.01702876e-3f;
-    p = p * f + 5.57999147e-2f;
-    p = p * f + 2.40164449e-1f;
-    p = p * f + 6.93151312e-1f;
+    float biased = t + kRoundingBias;
+    float f = t - (biased - kRoundingBias);  // in [-1/2, 1/2], exact
+    float p = 1.32647238e-3f;
+    p = p * f + 9.67151299e-3f;
+    p = p * f + 5.55073358e-2f;
+    p = p * f + 2.40222424e-1f;
+    p = p * f + 6.93147004e-1f;
     p = p * f + 1.0f;  // exactly 1 at 0: the centre tap's weight is exactly 1
-    std::int32_t bits = (static_cast<std::int32_t>(whole) + 127) << 23;
+    std::int32_t bits;
+    std::memcpy(&bits, &biased, sizeof bits);
+    bits <<= 23;  // n + 127 in [1, 127] into the exponent, the rest shifted out
     float scale;
     std::memcpy(&scale, &bits, sizeof scale);
     return p * scale;

@@ -38,7 +38,9 @@ struct Atrous {
         PixelIndex i = L.index(x, y);
         Float3 ci = in.load(i);
         Float3 ni = g.normal.load(i);
-        EdgeStoppingCentre centre = edgeStoppingCentre(edges, ci, ni, g.position.load(i));
+        // Exponents in base 2, the spline's log2 weight inside them: exp2 of each tap's sum.
+        const EdgeStoppingTerms terms = base2(edges);
+        EdgeStoppingCentre centre = edgeStoppingCentre(terms, ci, ni, g.position.load(i));
         std::int32_t idI = g.objectId[i];
         // Taps from the centre's object, or any object (a background centre's result is unused).
         AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
@@ -46,7 +48,7 @@ struct Atrous {
         // 2^log2k exp(-D_normal^2 / 2sn^2).
         float centreW = exp2Negative(2.0f * kLog2B3[2] -
                                      normalAngleSquared<OppositeNormalsVanish>(dot(ni, ni)) *
-                                         edges.normalScale * kLog2e);
+                                         terms.normalScale);
         Float3 sum = ci * centreW;
         float sumW = centreW;
         // The other 24 taps as 12 pairs at +offset and -offset, which share their kernel value
@@ -56,17 +58,17 @@ struct Atrous {
             int tx = pair % 5, ty = pair / 5;  // the taps before the centre, raster order
             PixelIndex o = L.offset((tx - 2) * step, (ty - 2) * step);
             PixelIndex ja = i + o, jb = i - o;
+            // The kernel value k = 2^log2k enters the exponent: no multiplication.
+            const float log2Kernel = kLog2B3[ty] + kLog2B3[tx];
             Float3 ca = in.load(ja), cb = in.load(jb);
             EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(
-                edges, centre, ca, g.normal.load(ja), g.position.load(ja));
+                terms, centre, ca, g.normal.load(ja), g.position.load(ja), log2Kernel);
             EdgeStoppingParts b = edgeStoppingParts<OppositeNormalsVanish>(
-                edges, centre, cb, g.normal.load(jb), g.position.load(jb));
+                terms, centre, cb, g.normal.load(jb), g.position.load(jb), log2Kernel);
             float exponentA, exponentB;
             pairExponents(a, b, exponentA, exponentB);
-            // The kernel value k = 2^log2k enters the exponent: no multiplication.
-            float log2Kernel = kLog2B3[ty] + kLog2B3[tx];
-            float wa = exp2Negative(log2Kernel - exponentA * kLog2e);
-            float wb = exp2Negative(log2Kernel - exponentB * kLog2e);
+            float wa = exp2Negative(-exponentA);
+            float wb = exp2Negative(-exponentB);
             wa = accepted.contains(g.objectId[ja]) ? wa : 0.0f;
             wb = accepted.contains(g.objectId[jb]) ? wb : 0.0f;
             sum += ca * wa + cb * wb;

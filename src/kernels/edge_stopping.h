@@ -39,14 +39,23 @@ RTD_HOST_DEVICE RTD_INLINE float normalAngleSquared(float cosine) {
 // The terms of J(i, j) (the exponent without its sign), with the plane term's division left to
 // the caller (two taps can share one: pairExponents):
 //   |C_i - C_j|^2 / 2sc^2 + acos(n_i . n_j)^2 / 2sn^2 + (n_i . (p_j - p_i)/|p_j - p_i|)^2 / 2sp^2
-// D_plane^2 = (n_i . dp)^2 / |dp|^2: no square root needed. |dp|^2 is floored at 1e-18, so D_plane
-// is 0 where the positions coincide (no division by zero) and two floors multiply to a normal
-// float.
+// D_plane^2 = (n_i . dp)^2 / |dp|^2: no square root needed. |dp|^2 gets 1e-18 added (no
+// division by zero where the positions coincide, D_plane is 0 there; two such floors multiply to
+// a normal float), which moves it by under 1e-6 relative wherever positions differ by more than
+// 1e-6.
 struct EdgeStoppingParts {
-    float colorAndNormal;    // the colour and normal terms
+    float colorAndNormal;    // the colour and normal terms, minus the caller's `bias`
     float planeNumerator;    // (n_i . dp)^2 / 2sp^2
-    float planeDenominator;  // |dp|^2
+    float planeDenominator;  // |dp|^2 + 1e-18
 };
+
+// The scales in base 2 (each times log2(e)): exponents that feed exp2 directly.
+RTD_HOST_DEVICE RTD_INLINE EdgeStoppingTerms base2(EdgeStoppingTerms t) {
+    t.colorScale *= kLog2e;
+    t.normalScale *= kLog2e;
+    t.planeScale *= kLog2e;
+    return t;
+}
 
 // What the terms need of the centre pixel, with the scales folded in where that saves a
 // multiplication per tap: the plane term's normal scaled by sqrt(1 / 2sp^2).
@@ -60,25 +69,28 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingCentre edgeStoppingCentre(const EdgeStopp
     return {color, normal, position, normal * std::sqrt(t.planeScale)};
 }
 
+// bias: subtracted from the colour and normal terms, where it costs no operation (the A-Trous
+// kernel's log2 of its spline weight).
 template <bool OppositeNormalsVanish = false>
 RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppingTerms& t,
                                                                const EdgeStoppingCentre& c,
                                                                Float3 colorJ, Float3 normalJ,
-                                                               Float3 positionJ) {
+                                                               Float3 positionJ,
+                                                               float bias = 0.0f) {
     Float3 dc = c.color - colorJ;
     float cosine = dot(c.normal, normalJ);
     float normalTerm;
     if constexpr (OppositeNormalsVanish) {
         // (1 - c) p(c)^2 / 2sn^2, the scale entering as (s - s c): no multiplication.
         float cc = clampf(cosine, 0.0f, 1.0f);
-        normalTerm = (t.normalScale - t.normalScale * cc) * square(acosSqrtFactor(cc));
+        normalTerm = (t.normalScale - t.normalScale * cc) * square(acosSqrtFactor(cc)) - bias;
     } else {
-        normalTerm = normalAngleSquared<false>(cosine) * t.normalScale;
+        normalTerm = normalAngleSquared<false>(cosine) * t.normalScale - bias;
     }
     Float3 dp = positionJ - c.position;
     float alongNormal = dot(c.planeNormal, dp);  // (n_i . dp) sqrt(1 / 2sp^2)
     return {dot(dc, dc) * t.colorScale + normalTerm, alongNormal * alongNormal,
-            maxf(dot(dp, dp), 1e-18f)};
+            dp.x * dp.x + (dp.y * dp.y + (dp.z * dp.z + 1e-18f))};
 }
 
 // The whole exponent of one tap.
