@@ -71,6 +71,29 @@ TEST(SvgfKernels, ModulatedIterationWritesTheResultTimesTheAlbedoInterleavedInst
                                               h.planes(albedo).load(h.layout.index(3, 4)).x);
 }
 
+TEST(SvgfKernels, NormalPowerBySquaringsMatchesThePower) {
+    // sigma_n = 128 by seven squarings against max(0, n.n')^128 in double precision, from
+    // parallel normals to opposite ones: within the squarings' rounding (each doubles the
+    // relative error: about 128 ulp) plus exp2's 1e-7.
+    const SvgfCentre centre{0.0f, make3(0.0f, 0.0f, 1.0f), 0.0f, 0.0f};
+    int weighty = 0;
+    for (int k = 0; k <= 2000; ++k) {
+        double angle = 3.14159265358979 * k / 2000.0;
+        Float3 n = make3(float(std::sin(angle)), 0.0f, float(std::cos(angle)));
+        double expected = std::pow(std::max(double(n.z), 0.0), 128.0);  // n . (0, 0, 1)
+        float w = svgfWeight<kPaperNormalSquarings>(paperTerms(), centre, 0.0f, 0.0f, n, 0.0f);
+        EXPECT_NEAR(w, expected, 2e-5 * expected + 1e-12) << "angle " << angle;
+        weighty += expected > 1e-3 ? 1 : 0;
+    }
+    EXPECT_GT(weighty, 20);  // the sweep covers the weights that matter
+    EXPECT_EQ(svgfWeight<kPaperNormalSquarings>(paperTerms(), centre, 0.0f, 0.0f,
+                                                make3(0.0f, 0.0f, 1.0f), 0.0f),
+              1.0f);  // parallel normals: exactly 1
+    EXPECT_EQ(svgfWeight<kPaperNormalSquarings>(paperTerms(), centre, 0.0f, 0.0f,
+                                                make3(0.0f, 0.0f, -1.0f), 0.0f),
+              0.0f);  // opposite ones: exactly 0
+}
+
 TEST(SvgfKernels, NormalPowerBySquaringsEqualsTheLogarithmForm) {
     // sigma_n = 128 both ways (7 squarings; exp of 128 ln n.n') over normals tilted by up to
     // ~25 degrees (weights from 1 down to ~1e-6) and a noisy colour: the same output.

@@ -79,25 +79,23 @@ constexpr float kLog2e = 1.44269504f;
 
 // 2^t for t <= 0 (the filters' weights, with their exponents in base 2): 2^n p(t - n) with n the
 // nearest integer to t and p a degree-5 near-minimax fit of 2^f on [-1/2, 1/2] with p(0) = 1
-// (relative error 9e-8). n comes from rounding t + 1.5 * 2^23 + 127, whose low mantissa bits are
-// then n + 127: shifted into the exponent field they make 2^n, with no conversion to an integer.
-// Results under 2^-126 flush to 0. GPU: its exp2 instruction (2 ulp).
+// (relative error 9e-8). 2^n without a conversion to an integer: n + 1.5 * 2^23 + 127 holds
+// n + 127 in its low mantissa bits, which shifted into the exponent field make 2^n. Results under
+// 2^-126 become 2^-126. GPU: its exp2 instruction (2 ulp).
 RTD_HOST_DEVICE RTD_INLINE float exp2Negative(float t) {
 #if defined(__CUDA_ARCH__)
     return exp2f(t);
 #else
-    // (t + c) - c must stay a rounding, not be simplified to t.
-    RTD_NO_REASSOCIATION
-    constexpr float kRoundingBias = 12583039.0f;  // 1.5 * 2^23 + 127
     t = maxf(t, -126.0f);
-    float biased = t + kRoundingBias;
-    float f = t - (biased - kRoundingBias);  // in [-1/2, 1/2], exact
+    float n = std::rint(t);  // one rounding instruction; round-half-even by default
+    float f = t - n;         // in [-1/2, 1/2], exact
     float p = 1.32647238e-3f;
     p = p * f + 9.67151299e-3f;
     p = p * f + 5.55073358e-2f;
     p = p * f + 2.40222424e-1f;
     p = p * f + 6.93147004e-1f;
-    p = p * f + 1.0f;  // exactly 1 at 0: the centre tap's weight is exactly 1
+    p = p * f + 1.0f;                // exactly 1 at 0: the centre tap's weight is exactly 1
+    float biased = n + 12583039.0f;  // 1.5 * 2^23 + 127 + n, exact
     std::int32_t bits;
     std::memcpy(&bits, &biased, sizeof bits);
     bits <<= 23;  // n + 127 in [1, 127] into the exponent, the rest shifted out
