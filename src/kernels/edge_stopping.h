@@ -24,13 +24,13 @@ inline bool oppositeNormalsVanish(const EdgeStoppingTerms& t) {
 }
 
 // D_normal^2 = acos(c)^2. OppositeNormalsVanish (see above): c < 0 may then be read as 0, whose
-// (pi/2)^2 weighs nothing too, and on [0, 1] acos(c)^2 = (1 - c) p(c)^2 (acosFast's fit,
-// squared) needs no square root.
+// (pi/2)^2 weighs nothing too, and on [0, 1] acos(c)^2 = (1 - c) q(c) (acosSquaredFactor) needs
+// no square root.
 template <bool OppositeNormalsVanish>
 RTD_HOST_DEVICE RTD_INLINE float normalAngleSquared(float cosine) {
     if constexpr (OppositeNormalsVanish) {
         float c = clampf(cosine, 0.0f, 1.0f);
-        return (1.0f - c) * square(acosSqrtFactor(c));
+        return (1.0f - c) * acosSquaredFactor(c);
     } else {
         return square(acosFast(cosine));
     }
@@ -81,9 +81,9 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppin
     float cosine = dot(c.normal, normalJ);
     float normalTerm;
     if constexpr (OppositeNormalsVanish) {
-        // (1 - c) p(c)^2 / 2sn^2, the scale entering as (s - s c): no multiplication.
+        // (1 - c) q(c) / 2sn^2, the scale entering as (s - s c): no multiplication.
         float cc = clampf(cosine, 0.0f, 1.0f);
-        normalTerm = (t.normalScale - t.normalScale * cc) * square(acosSqrtFactor(cc)) - bias;
+        normalTerm = (t.normalScale - t.normalScale * cc) * acosSquaredFactor(cc) - bias;
     } else {
         normalTerm = normalAngleSquared<false>(cosine) * t.normalScale - bias;
     }
