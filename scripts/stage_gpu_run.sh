@@ -5,6 +5,7 @@
 # scene, and setup.sh. On the GPU machine, from the repository root:
 #   . .devcarry/setup.sh && ctest --preset release -L gpu --output-on-failure
 #   build/release/rtdenoise bench --device cuda --frames 200
+#   scripts/gpu_checklist.sh "$OUT"       (all the GPU checks in one call)
 # (setup.sh links this checkout's path and ../shared's there: the paths the build recorded.)
 #   scripts/stage_gpu_run.sh [BUILD_DIR]   (default build/release, built with nvcc)
 set -euo pipefail
