@@ -308,6 +308,39 @@ TEST(Denoiser, NonFiniteRadianceIsReplacedAndCounted) {
     }
 }
 
+// A renderer's G-buffer can hold NaN or Inf too (degenerate geometry). Such a pixel is taken as
+// background: its radiance passes through, no filter or history test reads its geometry, so the
+// result is the frame's with those pixels marked background, and finite over several frames.
+TEST(Denoiser, NonFiniteGeometryMakesAPixelBackground) {
+    SceneDescription d;
+    d.colour = [](int x, int y) {
+        return std::array<float, 3>{0.2f + 0.01f * float((x * 7 + y * 3) % 13), 0.4f, 0.3f};
+    };
+    const Frame clean = makeFrame(d);
+    Frame broken = clean, background = clean;
+    const int pixels[6][2] = {{3, 4}, {9, 9}, {5, 6}, {12, 20}, {7, 8}, {20, 3}};
+    broken.normal.at(3, 4, 0) = std::nanf("");
+    broken.normal.at(9, 9, 2) = INFINITY;
+    broken.position.at(5, 6, 1) = std::nanf("");
+    broken.position.at(12, 20, 0) = -INFINITY;
+    broken.depth.at(7, 8, 0) = std::nanf("");
+    broken.depth.at(20, 3, 0) = INFINITY;
+    for (const auto& p : pixels) background.objectId[std::size_t(p[1]) * d.width + p[0]] = -1;
+    for (Method method : kAllMethods) {
+        Denoiser a(settingsFor(method)), b(settingsFor(method));
+        for (int frame = 0; frame < 3; ++frame) {
+            Image out = a.processFrame(broken), expected = b.processFrame(background);
+            for (std::size_t k = 0; k < out.pixels.size(); ++k) {
+                ASSERT_TRUE(std::isfinite(out.pixels[k])) << toString(method) << " " << frame;
+                ASSERT_EQ(out.pixels[k], expected.pixels[k]) << toString(method) << " " << k;
+            }
+            for (const auto& p : pixels)
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_EQ(out.at(p[0], p[1], c), clean.beauty.at(p[0], p[1], c));
+        }
+    }
+}
+
 TEST(Denoiser, InconsistentFramesAreRejectedWithAReason) {
     SceneDescription d;
     Frame good = makeFrame(d);

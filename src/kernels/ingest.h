@@ -1,7 +1,9 @@
 // Frame ingest: the renderer's interleaved RGB buffers into the denoiser's padded planar ones;
 // NaN/Inf in the radiance become 0 and object IDs outside -1..objectCount-1 become background
 // (-1), both flagged so the host can count them: the check runs on the device, in parallel, and
-// no kernel ever indexes the object matrices with a bad ID (device-memory inputs included). With an
+// no kernel ever indexes the object matrices with a bad ID (device-memory inputs included). A
+// pixel whose normal, position or depth is not finite (degenerate geometry) becomes background
+// too, its geometry 0: it passes through and no filter or history test reads its NaN. With an
 // albedo, object pixels are demodulated here (illumination = colour / max(albedo, epsilon)); the
 // ModulateKernel multiplies the same factor back at the end.
 #pragma once
@@ -45,18 +47,26 @@ struct IngestKernel {
         float r = albedoIn[3 * s], gr = albedoIn[3 * s + 1], b = albedoIn[3 * s + 2];
         std::int32_t id = idIn[s];
         bool idValid = id >= -1 && id < objectCount;
-        bool use = albedoRgb && idValid && id >= 0 && isFinite(r) && isFinite(gr) && isFinite(b);
+        Float3 n = make3(normalRgb[3 * s], normalRgb[3 * s + 1], normalRgb[3 * s + 2]);
+        Float3 p = make3(positionRgb[3 * s], positionRgb[3 * s + 1], positionRgb[3 * s + 2]);
+        float z = depthIn[s];
+        bool geometryFinite = isFinite(n.x) && isFinite(n.y) && isFinite(n.z) && isFinite(p.x) &&
+                              isFinite(p.y) && isFinite(p.z) && isFinite(z);
+        std::int32_t kept = idValid && geometryFinite ? id : -1;
+        bool use = albedoRgb && kept >= 0 && isFinite(r) && isFinite(gr) && isFinite(b);
         Float3 a;
         a.x = use ? maxf(r, albedoEpsilon) : 1.0f;
         a.y = use ? maxf(gr, albedoEpsilon) : 1.0f;
         a.z = use ? maxf(b, albedoEpsilon) : 1.0f;
         albedo.store(i, a);
         beauty.store(i, make3(c[0] / a.x, c[1] / a.y, c[2] / a.z));
-        normal.store(i, make3(normalRgb[3 * s], normalRgb[3 * s + 1], normalRgb[3 * s + 2]));
-        position.store(i,
-                       make3(positionRgb[3 * s], positionRgb[3 * s + 1], positionRgb[3 * s + 2]));
-        depth[i] = depthIn[s];
-        objectId[i] = idValid ? id : -1;
+        // Per component, as for the albedo above (a selected vector would stop vectorisation).
+        normal.store(i, make3(geometryFinite ? n.x : 0.0f, geometryFinite ? n.y : 0.0f,
+                              geometryFinite ? n.z : 0.0f));
+        position.store(i, make3(geometryFinite ? p.x : 0.0f, geometryFinite ? p.y : 0.0f,
+                                geometryFinite ? p.z : 0.0f));
+        depth[i] = geometryFinite ? z : 0.0f;
+        objectId[i] = kept;
         inputFlags[s] = std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag));
     }
 };
