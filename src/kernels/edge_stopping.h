@@ -93,13 +93,14 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppin
             dp.x * dp.x + (dp.y * dp.y + (dp.z * dp.z + 1e-18f))};
 }
 
-// The whole exponent of one tap.
+// The whole exponent of one tap, minus `bias` (as in edgeStoppingParts).
 template <bool OppositeNormalsVanish = false>
 RTD_HOST_DEVICE RTD_INLINE float edgeStoppingExponent(const EdgeStoppingTerms& t,
                                                       const EdgeStoppingCentre& c, Float3 colorJ,
-                                                      Float3 normalJ, Float3 positionJ) {
+                                                      Float3 normalJ, Float3 positionJ,
+                                                      float bias = 0.0f) {
     EdgeStoppingParts p =
-        edgeStoppingParts<OppositeNormalsVanish>(t, c, colorJ, normalJ, positionJ);
+        edgeStoppingParts<OppositeNormalsVanish>(t, c, colorJ, normalJ, positionJ, bias);
     return p.colorAndNormal + divideApprox(p.planeNumerator, p.planeDenominator);
 }
 

@@ -25,8 +25,11 @@ struct Jbf {
             out.store(i, ci);
             return;
         }
+        // Exponents in base 2, the position term inside them: exp2 of each tap's sum.
+        const EdgeStoppingTerms terms = base2(edges);
+        const float coordScale2 = coordScale * kLog2e;
         EdgeStoppingCentre centre =
-            edgeStoppingCentre(edges, ci, g.normal.load(i), g.position.load(i));
+            edgeStoppingCentre(terms, ci, g.normal.load(i), g.position.load(i));
         std::int32_t idI = g.objectId[i];
         AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
         float sumR = 0.0f, sumG = 0.0f, sumB = 0.0f, sumW = 0.0f;
@@ -38,10 +41,10 @@ struct Jbf {
             for (int dx = -radius; dx <= radius; ++dx) {
                 PixelIndex j = row + dx;
                 Float3 cj = in.load(j);
-                float exponent = (float(dx * dx) + dy2) * coordScale +
-                                 edgeStoppingExponent<OppositeNormalsVanish>(
-                                     edges, centre, cj, g.normal.load(j), g.position.load(j));
-                float w = expNegative(-exponent);  // then selected: no branch around it
+                float exponent = edgeStoppingExponent<OppositeNormalsVanish>(
+                    terms, centre, cj, g.normal.load(j), g.position.load(j),
+                    -(float(dx * dx) + dy2) * coordScale2);
+                float w = exp2Negative(-exponent);  // then selected: no branch around it
                 w = accepted.contains(g.objectId[j]) ? w : 0.0f;
                 sumR += w * cj.x;
                 sumG += w * cj.y;
