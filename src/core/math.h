@@ -62,6 +62,10 @@ RTD_HOST_DEVICE RTD_INLINE int mini(int a, int b) {
 RTD_HOST_DEVICE RTD_INLINE int maxi(int a, int b) {
     return a > b ? a : b;
 }
+// |x|: a sign-bit mask on the CPU, an operand modifier (no instruction) on the GPU.
+RTD_HOST_DEVICE RTD_INLINE float absf(float x) {
+    return std::fabs(x);
+}
 RTD_HOST_DEVICE RTD_INLINE Float3 clamp3(Float3 v, Float3 lo, Float3 hi) {
     return {clampf(v.x, lo.x, hi.x), clampf(v.y, lo.y, hi.y), clampf(v.z, lo.z, hi.z)};
 }
@@ -186,7 +190,7 @@ RTD_HOST_DEVICE RTD_INLINE float acosSquaredFactor(float a) {
 // arccos on [-1, 1] (input clamped): acos(|x|) = sqrt(1 - |x|) p(|x|), reflected for x < 0.
 RTD_HOST_DEVICE RTD_INLINE float acosFast(float x) {
     x = clampf(x, -1.0f, 1.0f);
-    float a = x < 0.0f ? -x : x;
+    float a = absf(x);
     float r = sqrtApprox(1.0f - a) * acosSqrtFactor(a);
     return x < 0.0f ? 3.14159265f - r : r;
 }

@@ -23,7 +23,7 @@ RTD_HOST_DEVICE RTD_INLINE bool acceptHistory(const HistoryTest& t, std::int32_t
     // Every term evaluated and combined with & and |, not early returns: no branch on the
     // setting (or per tap) inside the CPU's vectorised pixel loop.
     float dz = expectedDepth - previousDepth;
-    bool depthOk = (dz < 0 ? -dz : dz) <= t.depthTolerance * (fwidthDepth + 0.01f);
+    bool depthOk = absf(dz) <= t.depthTolerance * (fwidthDepth + 0.01f);
     Float3 dn = expectedNormal - previousNormal;
     bool normalOk = dot(dn, dn) <= square(t.normalTolerance * (fwidthNormal + 0.01f));
     return (previousId == id) & (!t.geometry | (depthOk & normalOk));

@@ -105,7 +105,7 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     Float3 expectedNormal =
         normalize(transformVector(object.currentWorldToPreviousWorld, g.normal.load(i)));
     float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
-    float fwidthDepth = (dzdx < 0 ? -dzdx : dzdx) + (dzdy < 0 ? -dzdy : dzdy);
+    float fwidthDepth = absf(dzdx) + absf(dzdy);
     float fwidthNormal = derivatives.at(2, i);
 
     float floorX = std::floor(sx), floorY = std::floor(sy);

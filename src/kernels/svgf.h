@@ -37,8 +37,7 @@ struct SvgfCentre {
 // The depth term's scale for a tap `offset` pixels away, log2(e) / (sigma_z |grad z . offset| +
 // eps): one division serves the taps at +offset and -offset (the slope's magnitude is the same).
 RTD_HOST_DEVICE RTD_INLINE float svgfDepthScale(const SvgfTerms& t, float depthAlongOffset) {
-    float slope = depthAlongOffset < 0 ? -depthAlongOffset : depthAlongOffset;
-    return divideApprox(kLog2e, t.sigmaDepth * slope + 1e-3f);
+    return divideApprox(kLog2e, t.sigmaDepth * absf(depthAlongOffset) + 1e-3f);
 }
 
 // The SVGF edge-stopping weight between a centre and a tap (before the tap mask), times the
@@ -58,8 +57,7 @@ RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre
     RTD_NO_REASSOCIATION
     float dz = c.depth - depthJ;
     float dl = c.luminance - lumJ;
-    float e =
-        ((dz < 0 ? -dz : dz) * depthScale - log2Kernel) + (dl < 0 ? -dl : dl) * c.luminanceScale;
+    float e = (absf(dz) * depthScale - log2Kernel) + absf(dl) * c.luminanceScale;
     float cosine = dot(c.normal, normalJ);
     if constexpr (NormalSquarings < 0) {
         // n.n' <= 0 gives sigma_n log2(1e-30): a weight of exactly 0.
