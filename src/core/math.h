@@ -62,6 +62,15 @@ RTD_HOST_DEVICE RTD_INLINE int mini(int a, int b) {
 RTD_HOST_DEVICE RTD_INLINE int maxi(int a, int b) {
     return a > b ? a : b;
 }
+// x clamped to [0, 1] (NaN to 0): on the GPU the saturation modifier of the instruction that
+// produced x (no instruction of its own).
+RTD_HOST_DEVICE RTD_INLINE float saturate(float x) {
+#if defined(__CUDA_ARCH__)
+    return __saturatef(x);
+#else
+    return clampf(x, 0.0f, 1.0f);
+#endif
+}
 // |x|: a sign-bit mask on the CPU, an operand modifier (no instruction) on the GPU.
 RTD_HOST_DEVICE RTD_INLINE float absf(float x) {
     return std::fabs(x);

@@ -29,7 +29,7 @@ inline bool oppositeNormalsVanish(const EdgeStoppingTerms& t) {
 template <bool OppositeNormalsVanish>
 RTD_HOST_DEVICE RTD_INLINE float normalAngleSquared(float cosine) {
     if constexpr (OppositeNormalsVanish) {
-        float c = clampf(cosine, 0.0f, 1.0f);
+        float c = saturate(cosine);
         return (1.0f - c) * acosSquaredFactor(c);
     } else {
         return square(acosFast(cosine));
@@ -82,7 +82,7 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppin
     float normalTerm;
     if constexpr (OppositeNormalsVanish) {
         // (1 - c) q(c) / 2sn^2, the scale entering as (s - s c): no multiplication.
-        float cc = clampf(cosine, 0.0f, 1.0f);
+        float cc = saturate(cosine);
         normalTerm = (t.normalScale - t.normalScale * cc) * acosSquaredFactor(cc) - bias;
     } else {
         normalTerm = normalAngleSquared<false>(cosine) * t.normalScale - bias;

@@ -64,7 +64,7 @@ RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre
         float wn = t.sigmaNormal * log2Positive(maxf(cosine, 1e-30f));
         return exp2Negative(minf(wn - e, 0.0f));
     } else {
-        float p = clampf(cosine, 0.0f, 1.0f);
+        float p = saturate(cosine);
         RTD_UNROLL
         for (int k = 0; k < NormalSquarings; ++k) p *= p;
         return p * exp2Negative(-e);
