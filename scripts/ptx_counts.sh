@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # PTX instructions per CUDA kernel, from nvcc alone (no GPU needed): a first look at what a
 # kernel change does to the GPU code where no GPU is at hand. ptxas optimises further (operand
-# modifiers, address arithmetic), so these are a guide, not the machine code's counts.
+# modifiers, address arithmetic, a PTX mul and add fused into one FMA), so these are a guide,
+# not the machine code's counts.
 #   scripts/ptx_counts.sh [REGEX]   (default: the A-Trous iterations at stride 4)
 set -euo pipefail
 cd "$(dirname "$0")/.."
