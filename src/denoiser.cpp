@@ -251,12 +251,19 @@ struct Denoiser::Impl {
             {{std::move(name), std::move(inputs), std::move(outputs)}, std::move(run)});
     }
 
-    // A pass's buffer list, plus `name` when it also modulates the output (reading the albedo,
-    // writing the output).
-    static std::vector<std::string> withModulation(bool modulated, std::vector<std::string> names,
-                                                   const char* name = "albedo") {
-        if (modulated) names.push_back(name);
+    // A pass's inputs, plus the albedo when it also modulates the output.
+    static std::vector<std::string> withModulation(bool modulated, std::vector<std::string> names) {
+        if (modulated) names.push_back("albedo");
         return names;
+    }
+
+    // The albedo multiplied back into `source` (its first three planes), written straight
+    // into the caller's interleaved output (or the staging buffer a GPU copies it from): for the
+    // methods whose last pass does not do it as it writes.
+    void addModulatePass(std::string inputName, const DeviceBuffer<float>& source) {
+        addPass("modulate", {std::move(inputName), "albedo"}, {"output"}, [this, &source] {
+            launch(ModulateKernel{layout, planes(source), planes(albedo), outputTarget});
+        });
     }
 
     // Adds the spatial filter reading `in`; its result lands in `filtered`.
@@ -291,23 +298,22 @@ struct Denoiser::Impl {
             std::string dstName = last ? "filtered" : fmt::format("atrous{}", level);
             int stride = 1 << level;
             bool modulated = last && modulateLast;
-            addPass(
-                fmt::format("atrous{}", level),
-                withModulation(modulated, {srcName, "normal", "position", "objectId"}),
-                modulated ? std::vector<std::string>{"output"} : std::vector<std::string>{dstName},
-                [this, src, dst, stride, edges, modulated] {
-                    auto run = [&]<class Kernel>() {
-                        launch(Kernel{gbuffer(), planes(*src), planes(*dst), stride, edges,
-                                      planes(albedo), outputTarget});
-                    };
-                    bool narrow = oppositeNormalsVanish(edges);  // no square root per tap
-                    if (modulated)
-                        narrow ? run.template operator()<AtrousNarrowNormalModulatedKernel>()
-                               : run.template operator()<AtrousModulatedKernel>();
-                    else
-                        narrow ? run.template operator()<AtrousNarrowNormalKernel>()
-                               : run.template operator()<AtrousKernel>();
-                });
+            addPass(fmt::format("atrous{}", level),
+                    withModulation(modulated, {srcName, "normal", "position", "objectId"}),
+                    {modulated ? std::string("output") : dstName},
+                    [this, src, dst, stride, edges, modulated] {
+                        auto run = [&]<class Kernel>() {
+                            launch(Kernel{gbuffer(), planes(*src), planes(*dst), stride, edges,
+                                          planes(albedo), outputTarget});
+                        };
+                        bool narrow = oppositeNormalsVanish(edges);  // no square root per tap
+                        if (modulated)
+                            narrow ? run.template operator()<AtrousNarrowNormalModulatedKernel>()
+                                   : run.template operator()<AtrousModulatedKernel>();
+                        else
+                            narrow ? run.template operator()<AtrousNarrowNormalKernel>()
+                                   : run.template operator()<AtrousKernel>();
+                    });
             src = dst;
             srcName = dstName;
         }
@@ -441,8 +447,7 @@ struct Denoiser::Impl {
             bool modulated = last && !isFeedback;
             addPass(fmt::format("svgf-atrous{}", it),
                     withModulation(modulated, {slotName(src), "normal", "depth", "derivatives"}),
-                    modulated ? std::vector<std::string>{"output"}
-                              : std::vector<std::string>{slotName(dst)},
+                    {modulated ? std::string("output") : slotName(dst)},
                     [this, terms, stride, src, dst, modulated] {
                         auto run = [&]<class Kernel>() {
                             launch(Kernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
@@ -459,10 +464,7 @@ struct Denoiser::Impl {
                                       : run.template operator()<SvgfAtrousKernel>();
                     });
             src = dst;
-            if (last && !modulated)
-                addPass("modulate", {slotName(dst), "albedo"}, {"output"}, [this, dst] {
-                    launch(ModulateKernel{layout, planes(slot(dst)), planes(albedo), outputTarget});
-                });
+            if (last && !modulated) addModulatePass(slotName(dst), slot(dst));
         }
     }
 
@@ -503,14 +505,9 @@ struct Denoiser::Impl {
                 addSvgfPasses(in, inName);
                 break;
         }
-        // Multiply the albedo back (1 without one), written straight into the caller's
-        // interleaved output (or the staging buffer a GPU copies it from). The other methods'
-        // last passes did it already (the JBF's own pass is under 1 % of its time).
-        if (settings.method == Method::Jbf) {
-            addPass("modulate", {"filtered", "albedo"}, {"output"}, [this] {
-                launch(ModulateKernel{layout, planes(filtered), planes(albedo), outputTarget});
-            });
-        }
+        // Multiply the albedo back (1 without one). The other methods' last passes did it already
+        // (the JBF's own pass is under 1 % of its time).
+        if (settings.method == Method::Jbf) addModulatePass("filtered", filtered);
         if (int(pipeline.size()) >= Device::kTimestampSlots)
             throw Error(ErrorCode::InvalidArgument, "settings: too many passes to time");
         for (const Pass& p : pipeline) passInfos.push_back(p.info);

@@ -99,10 +99,9 @@ struct Harness {
                 p.store(layout.index(x, y), make3(offset + r, offset + g, offset + b));
             }
     }
-    // The caller's interleaved RGB as a modulated kernel wrote it: its result planes times the
-    // albedo, at every pixel.
-    // relative: 0 for the same instantiation's result (4 ulp), else the tolerance between two
-    // instantiations (the compiler may order their sums differently).
+    // The caller's interleaved RGB as a modulated kernel wrote it: `result` times the albedo at
+    // every pixel, within 4 ulp (relative 0: `result` from the same instantiation) or `relative`
+    // (from another instantiation, which the compiler may sum in another order).
     void expectModulatedOutput(const Planes3& result, const Planes3& albedo,
                                const std::vector<float>& rgb, float relative = 0.0f) const {
         for (int y = 0; y < layout.height; ++y)

@@ -90,6 +90,16 @@ RTD_HOST_DEVICE RTD_INLINE bool isFinite(float v) {
 
 constexpr float kLog2e = 1.44269504f;
 
+// c0 + x (c1 + x (c2 + ...)): Horner's scheme, one fused multiply-add per coefficient after the
+// last.
+template <class... Rest>
+RTD_HOST_DEVICE RTD_INLINE float polynomial(float x, float c0, Rest... rest) {
+    if constexpr (sizeof...(Rest) == 0)
+        return c0;
+    else
+        return polynomial(x, rest...) * x + c0;
+}
+
 // 2^t for t <= 0 (the filters' weights, with their exponents in base 2): 2^n p(t - n) with n the
 // nearest integer to t and p a degree-5 near-minimax fit of 2^f on [-1/2, 1/2] with p(0) = 1
 // (relative error 9e-8). 2^n without a conversion to an integer: n + 1.5 * 2^23 + 127 holds
@@ -102,12 +112,9 @@ RTD_HOST_DEVICE RTD_INLINE float exp2Negative(float t) {
     t = maxf(t, -126.0f);
     float n = std::rint(t);  // one rounding instruction; round-half-even by default
     float f = t - n;         // in [-1/2, 1/2], exact
-    float p = 1.32647238e-3f;
-    p = p * f + 9.67151299e-3f;
-    p = p * f + 5.55073358e-2f;
-    p = p * f + 2.40222424e-1f;
-    p = p * f + 6.93147004e-1f;
-    p = p * f + 1.0f;                // exactly 1 at 0: the centre tap's weight is exactly 1
+    // Exactly 1 at 0: the centre tap's weight is exactly 1.
+    float p = polynomial(f, 1.0f, 6.93147004e-1f, 2.40222424e-1f, 5.55073358e-2f, 9.67151299e-3f,
+                         1.32647238e-3f);
     float biased = n + 12583039.0f;  // 1.5 * 2^23 + 127 + n, exact
     std::int32_t bits;
     std::memcpy(&bits, &biased, sizeof bits);
@@ -140,13 +147,8 @@ RTD_HOST_DEVICE RTD_INLINE float log2Positive(float x) {
     float m;
     std::memcpy(&m, &mantissaBits, sizeof m);
     float t = m - 1.0f;
-    float q = 1.07644191e-2f;
-    q = q * t - 5.51448824e-2f;
-    q = q * t + 1.34674123e-1f;
-    q = q * t - 2.25897751e-1f;
-    q = q * t + 3.28242120e-1f;
-    q = q * t - 4.99471772e-1f;
-    q = q * t + 9.99981138e-1f;
+    float q = polynomial(t, 9.99981138e-1f, -4.99471772e-1f, 3.28242120e-1f, -2.25897751e-1f,
+                         1.34674123e-1f, -5.51448824e-2f, 1.07644191e-2f);
     return exponent + t * q * kLog2e;
 #endif
 }
@@ -176,24 +178,16 @@ RTD_HOST_DEVICE RTD_INLINE float sqrtApprox(float x) {
 // p(a) with acos(a) = sqrt(1 - a) p(a) on [0, 1]: a degree-5 near-minimax fit (|error| of the
 // product < 1.2e-6 rad).
 RTD_HOST_DEVICE RTD_INLINE float acosSqrtFactor(float a) {
-    float p = -4.33703996e-3f;
-    p = p * a + 1.93479445e-2f;
-    p = p * a - 4.49569637e-2f;
-    p = p * a + 8.78755555e-2f;
-    p = p * a - 2.14512260e-1f;
-    return p * a + 1.57079521f;
+    return polynomial(a, 1.57079521f, -2.14512260e-1f, 8.78755555e-2f, -4.49569637e-2f,
+                      1.93479445e-2f, -4.33703996e-3f);
 }
 
 // q(a) with acos(a)^2 = (1 - a) q(a) on [0, 1]: a degree-5 near-minimax fit (relative error
 // 2e-6, as acos(a) = sqrt((1 - a) q(a)): 1.6e-6 rad). D_normal^2 with no square root and no
 // squaring.
 RTD_HOST_DEVICE RTD_INLINE float acosSquaredFactor(float a) {
-    float q = -1.71342585e-2f;
-    q = q * a + 7.60789290e-2f;
-    q = q * a - 1.73369169e-1f;
-    q = q * a + 3.20827037e-1f;
-    q = q * a - 6.73802674e-1f;
-    return q * a + 2.46739602f;
+    return polynomial(a, 2.46739602f, -6.73802674e-1f, 3.20827037e-1f, -1.73369169e-1f,
+                      7.60789290e-2f, -1.71342585e-2f);
 }
 
 // arccos on [-1, 1] (input clamped): acos(|x|) = sqrt(1 - |x|) p(|x|), reflected for x < 0.

@@ -61,11 +61,10 @@ struct IngestKernel {
         albedo.store(i, a);
         beauty.store(i, make3(c[0] / a.x, c[1] / a.y, c[2] / a.z));
         // Per component, as for the albedo above (a selected vector would stop vectorisation).
-        normal.store(i, make3(geometryFinite ? n.x : 0.0f, geometryFinite ? n.y : 0.0f,
-                              geometryFinite ? n.z : 0.0f));
-        position.store(i, make3(geometryFinite ? p.x : 0.0f, geometryFinite ? p.y : 0.0f,
-                                geometryFinite ? p.z : 0.0f));
-        depth[i] = geometryFinite ? z : 0.0f;
+        auto finiteOrZero = [geometryFinite](float v) { return geometryFinite ? v : 0.0f; };
+        normal.store(i, make3(finiteOrZero(n.x), finiteOrZero(n.y), finiteOrZero(n.z)));
+        position.store(i, make3(finiteOrZero(p.x), finiteOrZero(p.y), finiteOrZero(p.z)));
+        depth[i] = finiteOrZero(z);
         objectId[i] = kept;
         inputFlags[s] = std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag));
     }
