@@ -26,7 +26,7 @@ RTD_HOST_DEVICE RTD_INLINE bool acceptHistory(const HistoryTest& t, std::int32_t
     bool depthOk = absf(dz) <= t.depthTolerance * (fwidthDepth + 0.01f);
     Float3 dn = expectedNormal - previousNormal;
     bool normalOk = dot(dn, dn) <= square(t.normalTolerance * (fwidthNormal + 0.01f));
-    return (previousId == id) & (!t.geometry | (depthOk & normalOk));
+    return (previousId == id) & ((!t.geometry) | (depthOk & normalOk));
 }
 
 }  // namespace rtd
