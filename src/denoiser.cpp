@@ -427,7 +427,7 @@ struct Denoiser::Impl {
                                   planeSet(moments[current]), historyLength[current].data(),
                                   planeSet(varianceOut), wide, kShortHistory});
                 };
-                if (normalFactorBySquarings(wide))  // no logarithm per tap
+                if (normalFactorBySquarings(wide) && !device->hasFastLogarithm())
                     run.template operator()<SvgfVarianceNormal128Kernel>();
                 else
                     run.template operator()<SvgfVarianceKernel>();
@@ -454,7 +454,8 @@ struct Denoiser::Impl {
                                           planeSet(slot(dst)), stride, terms, planes(albedo),
                                           outputTarget});
                         };
-                        bool squarings = normalFactorBySquarings(terms);  // no logarithm per tap
+                        bool squarings =
+                            normalFactorBySquarings(terms) && !device->hasFastLogarithm();
                         if (modulated)
                             squarings
                                 ? run.template operator()<SvgfAtrousNormal128ModulatedKernel>()

@@ -17,6 +17,10 @@ class Device {
     virtual std::string name() const = 0;
     // True if kernels can read and write host memory directly (no staging copies needed).
     virtual bool sharesHostMemory() const = 0;
+    // True where log2 is one instruction (a GPU's special-function unit): SVGF's normal factor
+    // max(0, n.n')^128 is then cheaper as exp2(128 log2(n.n')) inside the weight's exponent than
+    // as 7 squarings. On the CPU log2 is a polynomial and the squarings win.
+    virtual bool hasFastLogarithm() const { return false; }
 
     virtual void* allocate(std::size_t bytes) = 0;
     virtual void release(void* pointer) noexcept = 0;

@@ -46,7 +46,8 @@ inline constexpr int kMinBlocksPerSm<SvgfVariance<NormalSquarings>> = 5;
 // - the course's A-Trous at strides 1-8, 170 registers: 0.176, 0.178, 0.182, 0.182 -> 0.156,
 //   0.156, 0.163, 0.159 ms (128 registers: 0.147, 0.159, 0.176, 0.175);
 // - SVGF's at strides 1-16, 128 registers: 0.125, 0.126, 0.129, 0.130, 0.148 -> 0.108, 0.112,
-//   0.120, 0.114, 0.137 ms (102 registers: 0.119 at stride 1, 2-19% slower at 2-16).
+//   0.120, 0.114, 0.137 ms (102 registers: 0.119 at stride 1, 2-19% slower at 2-16);
+// - the course's at stride 16 (later): 0.175 -> 0.155 ms (temporal's last level).
 template <class Kernel, int Stride>
 struct FixedStride {
     Kernel kernel;
@@ -57,7 +58,7 @@ struct FixedStride {
 template <class Kernel>
 inline constexpr int kFixedStridesUpTo = 0;
 template <bool NarrowNormal, bool Modulated>
-inline constexpr int kFixedStridesUpTo<Atrous<NarrowNormal, Modulated>> = 8;
+inline constexpr int kFixedStridesUpTo<Atrous<NarrowNormal, Modulated>> = 16;
 template <int NormalSquarings, bool Modulated>
 inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated>> = 16;
 // Their register budget: 3 blocks of 128 threads allow 170 registers, 4 128.
@@ -124,6 +125,7 @@ class CudaDevice final : public Device {
 
     std::string name() const override { return name_; }
     bool sharesHostMemory() const override { return false; }
+    bool hasFastLogarithm() const override { return true; }
 
     void* allocate(std::size_t bytes) override {
         void* p = nullptr;
