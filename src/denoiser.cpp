@@ -110,6 +110,9 @@ struct Denoiser::Impl {
     DeviceBuffer<float> illumination, varianceOut, filterA, filterB;  // 3, 4, 4, 4 planes
     DeviceBuffer<float> moments[2], historyLength[2], feedback[2];    // 2, 1, 4 planes
     DeviceBuffer<float> svgfHistory;  // kSvgfHistoryPlanes: the reprojected history
+    // svgf on a device that interleaves the guide: normal + depth, 4 floats per padded pixel
+    DeviceBuffer<float> normalDepth;
+    bool interleavedGuide = false;
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
@@ -127,6 +130,7 @@ struct Denoiser::Impl {
         validate(settings);
         device = createDevice(settings.device, settings.cpuIsa);
         temporal = settings.method == Method::Temporal || settings.method == Method::Svgf;
+        interleavedGuide = settings.method == Method::Svgf && device->interleavesGuide();
         buildPipeline();
     }
 
@@ -138,8 +142,12 @@ struct Denoiser::Impl {
     PlaneSet planeSet(const DeviceBuffer<float>& b) const { return {b.data(), layout.planeSize}; }
     PlaneSet sums() const { return planeSet(windowSums); }
     GBufferView gbuffer() const {
-        return {layout, planes(normal[current]), planes(position), depth[current].data(),
-                objectId[current].data()};
+        return {layout,
+                planes(normal[current]),
+                planes(position),
+                depth[current].data(),
+                objectId[current].data(),
+                {interleavedGuide ? normalDepth.data() : nullptr}};
     }
     PreviousGeometry previousGeometry() const {
         return {objectId[previous()].data(), depth[previous()].data(), planes(normal[previous()])};
@@ -229,6 +237,7 @@ struct Denoiser::Impl {
             filterA = planesBuffer(4);
             filterB = planesBuffer(4);
             svgfHistory = planesBuffer(kSvgfHistoryPlanes);
+            if (interleavedGuide) normalDepth = planesBuffer(4);
             for (int k = 0; k < 2; ++k) {
                 moments[k] = planesBuffer(2);
                 historyLength[k] = planesBuffer(1);
@@ -427,7 +436,9 @@ struct Denoiser::Impl {
                                   planeSet(moments[current]), historyLength[current].data(),
                                   planeSet(varianceOut), wide, kShortHistory});
                 };
-                if (normalFactorBySquarings(wide) && !device->hasFastLogarithm())
+                if (interleavedGuide)
+                    run.template operator()<SvgfVarianceInterleavedKernel>();
+                else if (normalFactorBySquarings(wide) && !device->hasFastLogarithm())
                     run.template operator()<SvgfVarianceNormal128Kernel>();
                 else
                     run.template operator()<SvgfVarianceKernel>();
@@ -445,25 +456,27 @@ struct Denoiser::Impl {
             // history too: then its slot is written and a modulate pass follows.
             bool last = it == sv.iterations - 1;
             bool modulated = last && !isFeedback;
-            addPass(fmt::format("svgf-atrous{}", it),
-                    withModulation(modulated, {slotName(src), "normal", "depth", "derivatives"}),
-                    {modulated ? std::string("output") : slotName(dst)},
-                    [this, terms, stride, src, dst, modulated] {
-                        auto run = [&]<class Kernel>() {
-                            launch(Kernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
-                                          planeSet(slot(dst)), stride, terms, planes(albedo),
-                                          outputTarget});
-                        };
-                        bool squarings =
-                            normalFactorBySquarings(terms) && !device->hasFastLogarithm();
-                        if (modulated)
-                            squarings
-                                ? run.template operator()<SvgfAtrousNormal128ModulatedKernel>()
-                                : run.template operator()<SvgfAtrousModulatedKernel>();
-                        else
-                            squarings ? run.template operator()<SvgfAtrousNormal128Kernel>()
-                                      : run.template operator()<SvgfAtrousKernel>();
-                    });
+            addPass(
+                fmt::format("svgf-atrous{}", it),
+                withModulation(modulated, {slotName(src), "normal", "depth", "derivatives"}),
+                {modulated ? std::string("output") : slotName(dst)},
+                [this, terms, stride, src, dst, modulated] {
+                    auto run = [&]<class Kernel>() {
+                        launch(Kernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
+                                      planeSet(slot(dst)), stride, terms, planes(albedo),
+                                      outputTarget});
+                    };
+                    bool squarings = normalFactorBySquarings(terms) && !device->hasFastLogarithm();
+                    if (interleavedGuide)
+                        modulated ? run.template operator()<SvgfAtrousInterleavedModulatedKernel>()
+                                  : run.template operator()<SvgfAtrousInterleavedKernel>();
+                    else if (modulated)
+                        squarings ? run.template operator()<SvgfAtrousNormal128ModulatedKernel>()
+                                  : run.template operator()<SvgfAtrousModulatedKernel>();
+                    else
+                        squarings ? run.template operator()<SvgfAtrousNormal128Kernel>()
+                                  : run.template operator()<SvgfAtrousKernel>();
+                });
             src = dst;
             if (last && !modulated) addModulatePass(slotName(dst), slot(dst));
         }
@@ -472,8 +485,10 @@ struct Denoiser::Impl {
     void buildPipeline() {
         padding = std::max(settings.outlier.enabled ? settings.outlier.radius : 0,
                            settings.method == Method::Temporal ? settings.temporal.clampRadius : 0);
-        addPass("ingest", {"frame"}, {"noisy", "albedo", "normal", "position", "depth", "objectId"},
-                [this] { ingest(); });
+        std::vector<std::string> ingested = {"noisy",    "albedo", "normal",
+                                             "position", "depth",  "objectId"};
+        if (interleavedGuide) ingested.push_back("normal+depth interleaved");
+        addPass("ingest", {"frame"}, ingested, [this] { ingest(); });
         DeviceBuffer<float>* in = &noisy;
         std::string inName = "noisy";
         if (settings.outlier.enabled) {
@@ -517,12 +532,29 @@ struct Denoiser::Impl {
 
     void ingest() {
         auto floats = [](const InputBuffer& b) { return static_cast<const float*>(b.device); };
-        launch(IngestKernel{layout, floats(inBeauty), floats(inNormal), floats(inPosition),
-                            floats(inDepth), static_cast<const std::int32_t*>(inId.device),
-                            objectCount, frameHasAlbedo ? floats(inAlbedo) : nullptr,
-                            settings.albedo.epsilon, planes(noisy), planes(albedo),
-                            planes(normal[current]), planes(position), depth[current].data(),
-                            objectId[current].data(), inputFlags.data()});
+        auto run = [&]<class Kernel>() {
+            launch(Kernel{layout,
+                          floats(inBeauty),
+                          floats(inNormal),
+                          floats(inPosition),
+                          floats(inDepth),
+                          static_cast<const std::int32_t*>(inId.device),
+                          objectCount,
+                          frameHasAlbedo ? floats(inAlbedo) : nullptr,
+                          settings.albedo.epsilon,
+                          planes(noisy),
+                          planes(albedo),
+                          planes(normal[current]),
+                          planes(position),
+                          depth[current].data(),
+                          objectId[current].data(),
+                          inputFlags.data(),
+                          {normalDepth.data()}});
+        };
+        if (interleavedGuide)
+            run.template operator()<IngestInterleavedKernel>();
+        else
+            run.template operator()<IngestKernel>();
     }
 
     // One matrix per object: current world -> object -> previous world (-> previous screen).

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "kernel_harness.h"
@@ -302,6 +303,141 @@ TEST(Svgf, WithoutAlbedoAConstantImageIsUnchanged) {
         for (std::size_t k = 0; k < out.pixels.size(); ++k)
             ASSERT_NEAR(out.pixels[k], frame.beauty.pixels[k], 1e-5f);
     }
+}
+
+// The GPU's kernels read normal and depth interleaved (views.h: NormalDepth4). On the same
+// values they compute what the planar kernels do, bit for bit: the same arithmetic, other loads.
+// Random geometry (tilted normals, depths, two objects and background), colours and variances.
+TEST(SvgfKernels, InterleavedGuideGivesThePlanarKernelsResults) {
+    const int w = 23, h = 17;
+    Harness hs(w, h, 8);
+    DeviceBuffer<float> guide = hs.buffer(4), in = hs.buffer(4), derivatives = hs.buffer(3),
+                        moments = hs.buffer(2), length = hs.buffer(1);
+    UnitRandom next{11u};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = hs.layout.index(x, y);
+            Float3 n = make3(next() - 0.5f, next() - 0.5f, -1.0f);
+            n = n * (1.0f / std::sqrt(dot(n, n)));
+            hs.planes(hs.normal).store(i, n);
+            hs.depth.data()[i] = 4.0f + next();
+            hs.ids.data()[i] = x == 5 && y == 6 ? -1 : (x + y) % 7 == 0 ? 1 : 0;
+            hs.planeSet(in).rgb().store(i, make3(next(), next(), next()));
+            hs.planeSet(in).at(3, i) = 0.1f * next();
+            hs.planeSet(derivatives).at(0, i) = 0.1f * (next() - 0.5f);
+            hs.planeSet(derivatives).at(1, i) = 0.1f * (next() - 0.5f);
+            hs.planeSet(moments).at(0, i) = next();
+            hs.planeSet(moments).at(1, i) = 0.1f * next();
+            length.data()[i] = 1.0f + 4.0f * next();  // short histories and long ones
+        }
+    // The interleaved copy, border included (zeros there, as in the Denoiser's buffers).
+    NormalDepth4 interleaved{guide.data()};
+    for (int i = 0; i < hs.layout.planeSize; ++i)
+        interleaved.store(i, hs.planes(hs.normal).load(i), hs.depth.data()[i]);
+    GBufferView planar = hs.gbuffer(), packed = hs.gbuffer();
+    packed.normalDepth = interleaved;
+    const SvgfTerms terms{1.0f, 100.0f, 4.0f, 1};  // sigma_n != 128: the log2 form on both
+    auto expectSamePlanes = [&](const DeviceBuffer<float>& a, const DeviceBuffer<float>& b,
+                                int planes, const char* what) {
+        for (int k = 0; k < planes; ++k)
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    auto i = hs.layout.index(x, y);
+                    ASSERT_EQ(hs.planeSet(a).at(k, i), hs.planeSet(b).at(k, i))
+                        << what << " plane " << k << " at " << x << ", " << y;
+                }
+    };
+    for (int stride : {1, 2, 4}) {
+        DeviceBuffer<float> outPlanar = hs.buffer(4), outPacked = hs.buffer(4);
+        hs.device->launch(SvgfAtrousKernel{planar, hs.planeSet(derivatives), hs.planeSet(in),
+                                           hs.planeSet(outPlanar), stride, terms},
+                          w, h);
+        hs.device->launch(
+            SvgfAtrousInterleavedKernel{packed, hs.planeSet(derivatives), hs.planeSet(in),
+                                        hs.planeSet(outPacked), stride, terms},
+            w, h);
+        expectSamePlanes(outPlanar, outPacked, 4, "iteration");
+        // Something was filtered: the result differs from the input somewhere.
+        EXPECT_NE(hs.planeSet(outPlanar).at(0, hs.layout.index(11, 8)),
+                  hs.planeSet(in).at(0, hs.layout.index(11, 8)));
+    }
+    DeviceBuffer<float> albedo = hs.buffer(3), unused = hs.buffer(4);
+    hs.fillRandom(hs.planes(albedo), next, 0.5f);
+    std::vector<float> rgbPlanar(3 * w * h), rgbPacked(3 * w * h, -1.0f);
+    hs.device->launch(SvgfAtrousModulatedKernel{planar, hs.planeSet(derivatives), hs.planeSet(in),
+                                                hs.planeSet(unused), 2, terms, hs.planes(albedo),
+                                                rgbPlanar.data()},
+                      w, h);
+    hs.device->launch(
+        SvgfAtrousInterleavedModulatedKernel{packed, hs.planeSet(derivatives), hs.planeSet(in),
+                                             hs.planeSet(unused), 2, terms, hs.planes(albedo),
+                                             rgbPacked.data()},
+        w, h);
+    EXPECT_EQ(rgbPlanar, rgbPacked);
+    // The short-history variance, revised in place from the same start.
+    DeviceBuffer<float> varPlanar = hs.buffer(4), varPacked = hs.buffer(4);
+    for (auto* b : {&varPlanar, &varPacked})
+        for (int i = 0; i < 4 * hs.layout.planeSize; ++i) b->data()[i] = in.data()[i];
+    hs.device->launch(SvgfVarianceKernel{planar, hs.planeSet(derivatives), hs.planeSet(in).rgb(),
+                                         hs.planeSet(moments), length.data(),
+                                         hs.planeSet(varPlanar), terms, 4.0f},
+                      w, h);
+    hs.device->launch(
+        SvgfVarianceInterleavedKernel{packed, hs.planeSet(derivatives), hs.planeSet(in).rgb(),
+                                      hs.planeSet(moments), length.data(), hs.planeSet(varPacked),
+                                      terms, 4.0f},
+        w, h);
+    expectSamePlanes(varPlanar, varPacked, 4, "variance");
+    EXPECT_NE(hs.planeSet(varPlanar).at(3, hs.layout.index(11, 8)),
+              hs.planeSet(in).at(3, hs.layout.index(11, 8)));
+}
+
+// The ingest's interleaved copy holds the normal and depth it writes to the planes, non-finite
+// geometry (made background, 0) included.
+TEST(SvgfKernels, InterleavingIngestWritesThePlanesNormalAndDepth) {
+    const int w = 9, h = 7, n = w * h;
+    Harness hs(w, h, 4);
+    std::vector<float> beauty(3 * n), normal(3 * n), position(3 * n), depth(n);
+    std::vector<std::int32_t> ids(n, 0);
+    UnitRandom next{5u};
+    for (auto* v : {&beauty, &normal, &position, &depth})
+        for (float& f : *v) f = next();
+    normal[3 * 10 + 1] = std::numeric_limits<float>::quiet_NaN();
+    depth[20] = std::numeric_limits<float>::infinity();
+    ids[30] = -1;
+    DeviceBuffer<float> noisy = hs.buffer(3), albedo = hs.buffer(3), guide = hs.buffer(4);
+    std::vector<std::uint8_t> flags(n);
+    hs.device->launch(IngestInterleavedKernel{hs.layout,
+                                              beauty.data(),
+                                              normal.data(),
+                                              position.data(),
+                                              depth.data(),
+                                              ids.data(),
+                                              1,
+                                              nullptr,
+                                              1e-3f,
+                                              hs.planes(noisy),
+                                              hs.planes(albedo),
+                                              hs.planes(hs.normal),
+                                              hs.planes(hs.position),
+                                              hs.depth.data(),
+                                              hs.ids.data(),
+                                              flags.data(),
+                                              {guide.data()}},
+                      w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = hs.layout.index(x, y);
+            Float3 nPacked;
+            float zPacked;
+            NormalDepth4{guide.data()}.load(i, nPacked, zPacked);
+            Float3 nPlanar = hs.planes(hs.normal).load(i);
+            EXPECT_EQ(nPacked.x, nPlanar.x);
+            EXPECT_EQ(nPacked.y, nPlanar.y);
+            EXPECT_EQ(nPacked.z, nPlanar.z);
+            EXPECT_EQ(zPacked, hs.depth.data()[i]);
+            EXPECT_EQ(zPacked, (y * w + x == 10 || y * w + x == 20) ? 0.0f : depth[y * w + x]);
+        }
 }
 
 TEST(Svgf, HistoryLengthGrowsAndResetsWhereAnObjectUncoversTheWall) {

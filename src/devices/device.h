@@ -21,6 +21,10 @@ class Device {
     // max(0, n.n')^128 is then cheaper as exp2(128 log2(n.n')) inside the weight's exponent than
     // as 7 squarings. On the CPU log2 is a polynomial and the squarings win.
     virtual bool hasFastLogarithm() const { return false; }
+    // True where the SVGF filters read their guide (normal, depth) interleaved, one 16-byte
+    // load per tap (a GPU), rather than from planes that load as contiguous vectors (a CPU).
+    // Such a device also has a fast logarithm: the interleaved kernels use the log2 form.
+    virtual bool interleavesGuide() const { return false; }
 
     virtual void* allocate(std::size_t bytes) = 0;
     virtual void release(void* pointer) noexcept = 0;

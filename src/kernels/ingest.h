@@ -12,7 +12,10 @@
 
 namespace rtd {
 
-struct IngestKernel {
+// InterleavedGuide: also writes normal and depth interleaved (views.h: NormalDepth4), the GPU's
+// copy of the guide the SVGF filters read.
+template <bool InterleavedGuide = false>
+struct Ingest {
     Layout layout;
     const float* beautyRgb;    // interleaved, 3 floats per pixel, rows of `width` pixels
     const float* normalRgb;    // interleaved
@@ -27,6 +30,7 @@ struct IngestKernel {
     std::int32_t* objectId;
     // Per pixel (unpadded): bits 0-1 the radiance values replaced by 0, kBadObjectIdFlag.
     std::uint8_t* inputFlags;
+    NormalDepth4 normalDepth = {};  // InterleavedGuide only
     static constexpr int kBadObjectIdFlag = 4;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
@@ -62,12 +66,16 @@ struct IngestKernel {
         beauty.store(i, make3(c[0] / a.x, c[1] / a.y, c[2] / a.z));
         // Per component, as for the albedo above (a selected vector would stop vectorisation).
         auto finiteOrZero = [geometryFinite](float v) { return geometryFinite ? v : 0.0f; };
-        normal.store(i, make3(finiteOrZero(n.x), finiteOrZero(n.y), finiteOrZero(n.z)));
+        Float3 keptNormal = make3(finiteOrZero(n.x), finiteOrZero(n.y), finiteOrZero(n.z));
+        normal.store(i, keptNormal);
         position.store(i, make3(finiteOrZero(p.x), finiteOrZero(p.y), finiteOrZero(p.z)));
         depth[i] = finiteOrZero(z);
+        if constexpr (InterleavedGuide) normalDepth.store(i, keptNormal, finiteOrZero(z));
         objectId[i] = kept;
         inputFlags[s] = std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag));
     }
 };
+using IngestKernel = Ingest<false>;
+using IngestInterleavedKernel = Ingest<true>;
 
 }  // namespace rtd

