@@ -26,7 +26,8 @@ void check(cudaError_t status, const char* what) {
 // - 128 for the A-Trous iterations, whose unrolled taps in +/- pairs spill under 85 (up to 132
 //   bytes per thread): 0.196-0.242 -> 0.176-0.195 ms;
 // - 102 for SVGF's A-Trous iterations and its variance (which spilled 1 KB per thread under 85):
-//   0.131-0.165 -> 0.123-0.140 ms, the variance 0.108 -> 0.058.
+//   0.131-0.165 -> 0.123-0.140 ms, the variance 0.108 -> 0.058. With the guide interleaved
+//   (views.h: NormalDepth4) the variance is back at the default: 0.054 -> 0.051 ms.
 constexpr int kThreadsPerBlock = 128;
 template <class Kernel>
 inline constexpr int kMinBlocksPerSm = 6;
@@ -34,8 +35,8 @@ template <bool NarrowNormal, bool Modulated>
 inline constexpr int kMinBlocksPerSm<Atrous<NarrowNormal, Modulated>> = 4;
 template <int NormalSquarings, bool Modulated, bool Interleaved>
 inline constexpr int kMinBlocksPerSm<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> = 5;
-template <int NormalSquarings, bool Interleaved>
-inline constexpr int kMinBlocksPerSm<SvgfVariance<NormalSquarings, Interleaved>> = 5;
+template <int NormalSquarings>
+inline constexpr int kMinBlocksPerSm<SvgfVariance<NormalSquarings, false>> = 5;
 
 // The A-Trous iterations with their stride as a compile-time constant (Kernel::filter<Stride>):
 // each tap row then needs one address per plane, its five taps' loads taking their column
@@ -61,12 +62,15 @@ template <bool NarrowNormal, bool Modulated>
 inline constexpr int kFixedStridesUpTo<Atrous<NarrowNormal, Modulated>> = 16;
 template <int NormalSquarings, bool Modulated, bool Interleaved>
 inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> = 16;
-// Their register budget: 3 blocks of 128 threads allow 170 registers, 4 128.
+// Their register budget: 3 blocks of 128 threads allow 170 registers, 4 128, 5 102. SVGF's with
+// the guide interleaved: 128 at stride 1, 102 from stride 2 (102 against 128 at strides 1-16:
+// 0.094, 0.097, 0.100, 0.098, 0.108 -> 0.100, 0.094, 0.100, 0.099, 0.099 ms).
 template <bool NarrowNormal, bool Modulated, int Stride>
 inline constexpr int kMinBlocksPerSm<FixedStride<Atrous<NarrowNormal, Modulated>, Stride>> = 3;
 template <int NormalSquarings, bool Modulated, bool Interleaved, int Stride>
 inline constexpr int
-    kMinBlocksPerSm<FixedStride<SvgfAtrous<NormalSquarings, Modulated, Interleaved>, Stride>> = 4;
+    kMinBlocksPerSm<FixedStride<SvgfAtrous<NormalSquarings, Modulated, Interleaved>, Stride>> =
+        (Interleaved && Stride > 1) ? 5 : 4;
 
 template <class Kernel>
 __global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
