@@ -157,11 +157,36 @@ struct Denoiser::Impl {
                 settings.history.normalTolerance};
     }
     template <class Kernel>
-    void launchSvgfReproject() {
-        launch(Kernel{gbuffer(), previousGeometry(), objects.data(), objectCount,
-                      planeSet(derivatives), historyTest(), planeSet(feedback[previous()]),
-                      planeSet(moments[previous()]), historyLength[previous()].data(),
-                      planeSet(svgfHistory), validity.data(), hasHistory ? 1 : 0});
+    Kernel svgfReproject() const {
+        return {gbuffer(),
+                previousGeometry(),
+                objects.data(),
+                objectCount,
+                planeSet(derivatives),
+                historyTest(),
+                planeSet(feedback[previous()]),
+                planeSet(moments[previous()]),
+                historyLength[previous()].data(),
+                planeSet(svgfHistory),
+                validity.data(),
+                hasHistory ? 1 : 0};
+    }
+    SvgfAccumulateKernel svgfAccumulate(const DeviceBuffer<float>& in) const {
+        const SvgfSettings& sv = settings.svgf;
+        return {gbuffer(),
+                planes(in),
+                sums(),
+                kSvgfWindowRadius,
+                sv.historyClampK,
+                planeSet(svgfHistory),
+                validity.data(),
+                planes(illumination),
+                planeSet(moments[current]),
+                historyLength[current].data(),
+                planeSet(varianceOut),
+                sv.alpha,
+                sv.momentsAlpha,
+                float(sv.maxHistory)};
     }
 
     // A window kernel (window_sums.h) in the instantiation that covers `radius`: the 7x7 one
@@ -407,21 +432,28 @@ struct Denoiser::Impl {
         std::vector<std::string> reprojectInputs = {
             "position",          "normal",   "depth",   "objectId",      "derivatives",
             "previous geometry", "feedback", "moments", "historyLength", "matrices"};
-        addPass("svgf-reproject", reprojectInputs, {"history", "validity"},
-                [this] { launchSvgfReproject<SvgfReprojectKernel>(); });
-        // The pixels whose bilinear taps all failed, again with the 3x3 search (few: sparse).
-        reprojectInputs.push_back("validity");
-        addPass("svgf-reproject-search", reprojectInputs, {"history", "validity"},
-                [this] { launchSvgfReproject<SvgfReprojectSearchKernel>(); });
-        addPass("svgf-accumulate", {inName, "windowSums", "objectId", "history", "validity"},
-                {"illumination", "moments", "historyLength", "illumination+variance"},
-                [this, in, sv] {
-                    launch(SvgfAccumulateKernel{
-                        gbuffer(), planes(*in), sums(), kSvgfWindowRadius, sv.historyClampK,
-                        planeSet(svgfHistory), validity.data(), planes(illumination),
-                        planeSet(moments[current]), historyLength[current].data(),
-                        planeSet(varianceOut), sv.alpha, sv.momentsAlpha, float(sv.maxHistory)});
-                });
+        std::vector<std::string> accumulated = {"illumination", "moments", "historyLength",
+                                                "illumination+variance"};
+        if (device->prefersFusedPasses()) {
+            // One pass, the history in registers (SvgfTemporalKernel).
+            std::vector<std::string> inputs = reprojectInputs;
+            inputs.insert(inputs.end(), {inName, "windowSums"});
+            accumulated.push_back("validity");
+            addPass("svgf-temporal", inputs, accumulated, [this, in] {
+                launch(
+                    SvgfTemporalKernel{svgfReproject<SvgfReprojectKernel>(), svgfAccumulate(*in)});
+            });
+        } else {
+            addPass("svgf-reproject", reprojectInputs, {"history", "validity"},
+                    [this] { launch(svgfReproject<SvgfReprojectKernel>()); });
+            // The pixels whose bilinear taps all failed, again with the 3x3 search (few:
+            // sparse).
+            reprojectInputs.push_back("validity");
+            addPass("svgf-reproject-search", reprojectInputs, {"history", "validity"},
+                    [this] { launch(svgfReproject<SvgfReprojectSearchKernel>()); });
+            addPass("svgf-accumulate", {inName, "windowSums", "objectId", "history", "validity"},
+                    accumulated, [this, in] { launch(svgfAccumulate(*in)); });
+        }
         // Short histories only (block-sparse): the accumulation wrote the rest.
         addPass(
             "svgf-variance",

@@ -25,6 +25,10 @@ class Device {
     // load per tap (a GPU), rather than from planes that load as contiguous vectors (a CPU).
     // Such a device also has a fast logarithm: the interleaved kernels use the log2 form.
     virtual bool interleavesGuide() const { return false; }
+    // True where passes the CPU keeps apart run better as one (a GPU): there a pass's
+    // intermediate planes cost a round trip through memory, and a rare branch (SVGF's 3x3
+    // history search) only its warp. The CPU splits them so that each vectorises.
+    virtual bool prefersFusedPasses() const { return false; }
 
     virtual void* allocate(std::size_t bytes) = 0;
     virtual void release(void* pointer) noexcept = 0;

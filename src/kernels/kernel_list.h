@@ -53,6 +53,7 @@ inline constexpr bool
     X(SvgfReprojectKernel)                  \
     X(SvgfReprojectSearchKernel)            \
     X(SvgfAccumulateKernel)                 \
+    X(SvgfTemporalKernel)                   \
     X(SvgfVarianceKernel)                   \
     X(SvgfVarianceNormal128Kernel)          \
     X(SvgfVarianceInterleavedKernel)        \

@@ -94,6 +94,12 @@ constexpr int kSvgfHistoryPlanes = 6;  // rgb, luminance mean, luminance varianc
 // revisits only the object pixels whose bilinear taps all failed (code kReprojectionOtherObject)
 // and redoes them with the 3x3 search. Those are few (disocclusion edges), so the second pass is
 // a cheap sparse one and the first does not pay for nine taps everywhere.
+// One pixel's reprojected history (SvgfReproject's output, in registers or planes).
+struct SvgfHistorySample {
+    Float3 rgb;
+    float mean = 0.0f, variance = 0.0f, length = 0.0f;
+};
+
 template <bool Search3x3>
 struct SvgfReproject {
     static constexpr bool kSparse = Search3x3;  // the CPU launcher keeps it scalar
@@ -122,9 +128,21 @@ struct SvgfReproject {
         if constexpr (Search3x3) {
             if (validity[i] != kReprojectionOtherObject || g.objectId[i] < 0) return;
         }
+        std::uint8_t code;
+        SvgfHistorySample s = sample<KnownId>(i, id, code);
+        validity[i] = code;
+        history.rgb().store(i, s.rgb);
+        history.at(3, i) = s.mean;
+        history.at(4, i) = s.variance;
+        history.at(5, i) = s.length;
+    }
+    // The history at pixel i and its validity code (reads only the previous frame's data).
+    template <bool KnownId>
+    RTD_HOST_DEVICE RTD_INLINE SvgfHistorySample sample(PixelIndex i, std::int32_t id,
+                                                        std::uint8_t& code) const {
         auto taps = findHistory<Search3x3, KnownId>(g, i, previous, objects, objectCount,
                                                     derivatives, test, hasHistory, id);
-        validity[i] = taps.code;
+        code = taps.code;
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps], means[kTaps], variances[kTaps], lengths[kTaps];
         loadTaps(previousIllumination.rgb(), taps, r, gr, b);
@@ -145,10 +163,7 @@ struct SvgfReproject {
         RTD_UNROLL
         for (int t = 0; t < kTaps; ++t)
             variance += (variances[t] + square(means[t] - mean)) * taps.weight[t];
-        history.rgb().store(i, rgb);
-        history.at(3, i) = mean;
-        history.at(4, i) = variance;
-        history.at(5, i) = h;
+        return {rgb, mean, variance, h};
     }
 };
 using SvgfReprojectKernel = SvgfReproject<false>;
@@ -175,14 +190,19 @@ struct SvgfAccumulateKernel {
     // Branch-free (every pixel computes every term; selects pick the outputs) so the CPU
     // vectorises it across pixels.
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        PixelIndex i = g.layout.index(x, y);
+        accumulate(i, {history.rgb().load(i), history.at(3, i), history.at(4, i), history.at(5, i)},
+                   validity[i] == kReprojectionValid);
+    }
+    // Pixel i with its reprojected history `s` (valid: the history test passed).
+    RTD_HOST_DEVICE RTD_INLINE void accumulate(PixelIndex i, SvgfHistorySample s,
+                                               bool valid) const {
         const Layout& L = g.layout;
-        PixelIndex i = L.index(x, y);
         Float3 current = radiance.load(i);
         bool object = g.objectId[i] >= 0;
-        bool valid = validity[i] == kReprojectionValid;
         float l = luminance(current);
-        Float3 previous = history.rgb().load(i);
-        float mean = history.at(3, i), variance = history.at(4, i), h = history.at(5, i);
+        Float3 previous = s.rgb;
+        float mean = s.mean, variance = s.variance, h = s.length;
         {
             // Anti-lag (clampK > 0): history outside what the current frame's neighbourhood
             // allows (a light switched, a shadow moved) is pulled into mu +- k sigma; ordinary
@@ -222,6 +242,40 @@ struct SvgfAccumulateKernel {
         length[i] = object ? h : 0.0f;
         filterInput.rgb().store(i, result);
         filterInput.at(3, i) = newVariance;
+    }
+};
+
+// The temporal stage in one pass (the GPU's): reprojection, the 3x3 search where the bilinear
+// taps all failed, and accumulation, the history kept in registers (no history planes written
+// and read back). Its parts are the three kernels' own code; `accumulate.history` and
+// `.validity` are unused, `reproject.history` too. The CPU runs the three passes instead: there
+// the search's branch would stop the vectorisation of the whole pass.
+struct SvgfTemporalKernel {
+    SvgfReprojectKernel reproject;
+    SvgfAccumulateKernel accumulate;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const GBufferView& g = reproject.g;
+        PixelIndex i = g.layout.index(x, y);
+        std::uint8_t code;
+        SvgfHistorySample s = reproject.sample<false>(i, 0, code);
+        if (code == kReprojectionOtherObject && g.objectId[i] >= 0) {
+            SvgfReprojectSearchKernel search{reproject.g,
+                                             reproject.previous,
+                                             reproject.objects,
+                                             reproject.objectCount,
+                                             reproject.derivatives,
+                                             reproject.test,
+                                             reproject.previousIllumination,
+                                             reproject.previousMoments,
+                                             reproject.previousLength,
+                                             reproject.history,
+                                             reproject.validity,
+                                             reproject.hasHistory};
+            s = search.sample<false>(i, 0, code);
+        }
+        reproject.validity[i] = code;
+        accumulate.accumulate(i, s, code == kReprojectionValid);
     }
 };
 
