@@ -65,8 +65,12 @@ inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated, In
 // Their register budget: 3 blocks of 128 threads allow 170 registers, 4 128, 5 102. SVGF's with
 // the guide interleaved: 128 at stride 1, 102 from stride 2 (102 against 128 at strides 1-16:
 // 0.094, 0.097, 0.100, 0.098, 0.108 -> 0.100, 0.094, 0.100, 0.099, 0.099 ms).
+// The course's: 128 at stride 1, 170 from stride 2 (128 against 170 at strides 1-16: 0.152,
+// 0.152, 0.158, 0.155, 0.155 -> 0.143, 0.151, 0.160, 0.158, 0.159 ms; modulated at 16: 0.173 ->
+// 0.186).
 template <bool NarrowNormal, bool Modulated, int Stride>
-inline constexpr int kMinBlocksPerSm<FixedStride<Atrous<NarrowNormal, Modulated>, Stride>> = 3;
+inline constexpr int kMinBlocksPerSm<FixedStride<Atrous<NarrowNormal, Modulated>, Stride>> =
+    Stride == 1 ? 4 : 3;
 template <int NormalSquarings, bool Modulated, bool Interleaved, int Stride>
 inline constexpr int
     kMinBlocksPerSm<FixedStride<SvgfAtrous<NormalSquarings, Modulated, Interleaved>, Stride>> =
