@@ -135,6 +135,7 @@ class CudaDevice final : public Device {
     bool sharesHostMemory() const override { return false; }
     bool hasFastLogarithm() const override { return true; }
     bool interleavesGuide() const override { return true; }
+    bool prefersFusedPasses() const override { return true; }
 
     void* allocate(std::size_t bytes) override {
         void* p = nullptr;
