@@ -109,7 +109,7 @@ struct Denoiser::Impl {
     // svgf only
     DeviceBuffer<float> illumination, varianceOut, filterA, filterB;  // 3, 4, 4, 4 planes
     DeviceBuffer<float> moments[2], historyLength[2], feedback[2];    // 2, 1, 4 planes
-    DeviceBuffer<float> svgfHistory;  // kSvgfHistoryPlanes: the reprojected history
+    DeviceBuffer<float> svgfHistory;  // kSvgfHistoryPlanes: the reprojected history (CPU)
     // svgf on a device that interleaves the guide: normal + depth, 4 floats per padded pixel
     DeviceBuffer<float> normalDepth;
     bool interleavedGuide = false;
@@ -261,7 +261,8 @@ struct Denoiser::Impl {
             varianceOut = planesBuffer(4);
             filterA = planesBuffer(4);
             filterB = planesBuffer(4);
-            svgfHistory = planesBuffer(kSvgfHistoryPlanes);
+            // The one-pass temporal stage keeps the history in registers.
+            if (!device->prefersFusedPasses()) svgfHistory = planesBuffer(kSvgfHistoryPlanes);
             if (interleavedGuide) normalDepth = planesBuffer(4);
             for (int k = 0; k < 2; ++k) {
                 moments[k] = planesBuffer(2);

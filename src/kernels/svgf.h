@@ -88,18 +88,18 @@ RTD_HOST_DEVICE RTD_INLINE bool normalFactorBySquarings(const SvgfTerms& t) {
 // The reprojection hands the history to the accumulation in kSvgfHistoryPlanes planes.
 constexpr int kSvgfHistoryPlanes = 6;  // rgb, luminance mean, luminance variance, length
 
-// Reprojection: the previous frame's illumination, moments and history length sampled at each
-// pixel's back-projected position (all 0 where the history test fails). Search3x3 = false runs on
-// every pixel with the bilinear taps (branch-free, vectorised on the CPU); Search3x3 = true then
-// revisits only the object pixels whose bilinear taps all failed (code kReprojectionOtherObject)
-// and redoes them with the 3x3 search. Those are few (disocclusion edges), so the second pass is
-// a cheap sparse one and the first does not pay for nine taps everywhere.
 // One pixel's reprojected history (SvgfReproject's output, in registers or planes).
 struct SvgfHistorySample {
     Float3 rgb;
     float mean = 0.0f, variance = 0.0f, length = 0.0f;
 };
 
+// Reprojection: the previous frame's illumination, moments and history length sampled at each
+// pixel's back-projected position (all 0 where the history test fails). Search3x3 = false runs on
+// every pixel with the bilinear taps (branch-free, vectorised on the CPU); Search3x3 = true then
+// revisits only the object pixels whose bilinear taps all failed (code kReprojectionOtherObject)
+// and redoes them with the 3x3 search. Those are few (disocclusion edges), so the second pass is
+// a cheap sparse one and the first does not pay for nine taps everywhere.
 template <bool Search3x3>
 struct SvgfReproject {
     static constexpr bool kSparse = Search3x3;  // the CPU launcher keeps it scalar

@@ -102,7 +102,7 @@ struct GBufferView {
     Planes3 position;
     const float* depth = nullptr;
     const std::int32_t* objectId = nullptr;  // -1: background and border
-    NormalDepth4 normalDepth = {};  // null unless the device interleaves the guide (Device.h)
+    NormalDepth4 normalDepth = {};  // null unless the device interleaves the guide (device.h)
 };
 
 // Normal and depth at a tap: from the interleaved copy (Interleaved) or the planes.
