@@ -315,10 +315,11 @@ TEST(CpuLauncher, InterleavedRowsVisitEveryRowOnceClassByClass) {
                 ASSERT_GE(y, 0);
                 ASSERT_LT(y, height);
                 ++seen[std::size_t(y)];
-                if (previous >= 0 && previous % stride == y % stride)
+                if (previous >= 0 && previous % stride == y % stride) {
                     EXPECT_EQ(y, previous + stride) << height << ", " << stride << ", k " << k;
-                else if (previous >= 0)
+                } else if (previous >= 0) {
                     EXPECT_EQ(y % stride, previous % stride + 1) << "classes in order";
+                }
                 previous = y;
             }
             for (int y = 0; y < height; ++y) EXPECT_EQ(seen[std::size_t(y)], 1) << y;
