@@ -110,8 +110,9 @@ struct Denoiser::Impl {
     DeviceBuffer<float> illumination, varianceOut, filterA, filterB;  // 3, 4, 4, 4 planes
     DeviceBuffer<float> moments[2], historyLength[2], feedback[2];    // 2, 1, 4 planes
     DeviceBuffer<float> svgfHistory;  // kSvgfHistoryPlanes: the reprojected history (CPU)
-    // svgf on a device that interleaves the guide: normal + depth, 4 floats per padded pixel
-    DeviceBuffer<float> normalDepth;
+    // svgf on a device that interleaves the guide: normal + depth, 4 floats per padded pixel,
+    // this frame's and the last (in place of the normal and depth planes)
+    DeviceBuffer<float> normalDepth[2];
     bool interleavedGuide = false;
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
@@ -130,7 +131,9 @@ struct Denoiser::Impl {
         validate(settings);
         device = createDevice(settings.device, settings.cpuIsa);
         temporal = settings.method == Method::Temporal || settings.method == Method::Svgf;
-        interleavedGuide = settings.method == Method::Svgf && device->interleavesGuide();
+        // Its temporal stage reads the interleaved copies in the one-pass form only.
+        interleavedGuide = settings.method == Method::Svgf && device->interleavesGuide() &&
+                           device->prefersFusedPasses();
         buildPipeline();
     }
 
@@ -147,10 +150,13 @@ struct Denoiser::Impl {
                 planes(position),
                 depth[current].data(),
                 objectId[current].data(),
-                {interleavedGuide ? normalDepth.data() : nullptr}};
+                {normalDepth[current].data()}};
     }
     PreviousGeometry previousGeometry() const {
-        return {objectId[previous()].data(), depth[previous()].data(), planes(normal[previous()])};
+        return {objectId[previous()].data(),
+                depth[previous()].data(),
+                planes(normal[previous()]),
+                {normalDepth[previous()].data()}};
     }
     HistoryTest historyTest() const {
         return {settings.history.geometryTests ? 1 : 0, settings.history.depthTolerance,
@@ -238,14 +244,20 @@ struct Denoiser::Impl {
                             (settings.method == Method::Temporal &&
                              settings.temporal.spatialFilter == SpatialFilter::Atrous);
         bool assignmentTemporal = settings.method == Method::Temporal;
-        for (auto* b : {&noisy, &position, &albedo, &normal[0], &normal[1]}) *b = planesBuffer(3);
+        for (auto* b : {&noisy, &position, &albedo}) *b = planesBuffer(3);
+        for (int k = 0; k < 2; ++k) {
+            if (interleavedGuide) {
+                normalDepth[k] = planesBuffer(4);
+            } else {
+                normal[k] = planesBuffer(3);
+                depth[k] = planesBuffer(1);
+            }
+        }
         if (settings.method != Method::Svgf) filtered = planesBuffer(3);
         if (settings.outlier.enabled) despeckled = planesBuffer(3);
         if (atrousLevels) scratch = planesBuffer(3);
         if (assignmentTemporal)
             for (auto* b : {&reprojected, &history[0], &history[1]}) *b = planesBuffer(3);
-        depth[0] = planesBuffer(1);
-        depth[1] = planesBuffer(1);
         if (settings.method == Method::Temporal || settings.method == Method::Svgf)
             derivatives = planesBuffer(3);
         windowSums = planesBuffer(7);
@@ -263,7 +275,6 @@ struct Denoiser::Impl {
             filterB = planesBuffer(4);
             // The one-pass temporal stage keeps the history in registers.
             if (!device->prefersFusedPasses()) svgfHistory = planesBuffer(kSvgfHistoryPlanes);
-            if (interleavedGuide) normalDepth = planesBuffer(4);
             for (int k = 0; k < 2; ++k) {
                 moments[k] = planesBuffer(2);
                 historyLength[k] = planesBuffer(1);
@@ -358,7 +369,10 @@ struct Denoiser::Impl {
         // Derivatives read 1 pixel away; the reprojection's 3x3 taps reach 2 past the screen.
         padding = std::max(padding, 2);
         addPass("geometry", {"depth", "normal", "objectId"}, {"derivatives"}, [this] {
-            launch(GeometryDerivativesKernel{gbuffer(), planeSet(derivatives)});
+            if (interleavedGuide)
+                launch(GeometryDerivativesInterleavedKernel{gbuffer(), planeSet(derivatives)});
+            else
+                launch(GeometryDerivativesKernel{gbuffer(), planeSet(derivatives)});
         });
     }
 
@@ -441,8 +455,11 @@ struct Denoiser::Impl {
             inputs.insert(inputs.end(), {inName, "windowSums"});
             accumulated.push_back("validity");
             addPass("svgf-temporal", inputs, accumulated, [this, in] {
-                launch(
-                    SvgfTemporalKernel{svgfReproject<SvgfReprojectKernel>(), svgfAccumulate(*in)});
+                auto reproject = svgfReproject<SvgfReprojectKernel>();
+                if (interleavedGuide)
+                    launch(SvgfTemporalInterleavedKernel{reproject, svgfAccumulate(*in)});
+                else
+                    launch(SvgfTemporalKernel{reproject, svgfAccumulate(*in)});
             });
         } else {
             addPass("svgf-reproject", reprojectInputs, {"history", "validity"},
@@ -520,7 +537,6 @@ struct Denoiser::Impl {
                            settings.method == Method::Temporal ? settings.temporal.clampRadius : 0);
         std::vector<std::string> ingested = {"noisy",    "albedo", "normal",
                                              "position", "depth",  "objectId"};
-        if (interleavedGuide) ingested.push_back("normal+depth interleaved");
         addPass("ingest", {"frame"}, ingested, [this] { ingest(); });
         DeviceBuffer<float>* in = &noisy;
         std::string inName = "noisy";
@@ -582,7 +598,7 @@ struct Denoiser::Impl {
                           depth[current].data(),
                           objectId[current].data(),
                           inputFlags.data(),
-                          {normalDepth.data()}});
+                          {normalDepth[current].data()}});
         };
         if (interleavedGuide)
             run.template operator()<IngestInterleavedKernel>();

@@ -393,11 +393,19 @@ TEST(SvgfKernels, InterleavedGuideGivesThePlanarKernelsResults) {
     expectSamePlanes(varPlanar, varPacked, 4, "variance");
     EXPECT_NE(hs.planeSet(varPlanar).at(3, hs.layout.index(11, 8)),
               hs.planeSet(in).at(3, hs.layout.index(11, 8)));
+    // The geometry derivatives (depth slopes, normal change).
+    DeviceBuffer<float> slopesPlanar = hs.buffer(3), slopesPacked = hs.buffer(3);
+    hs.device->launch(GeometryDerivativesKernel{planar, hs.planeSet(slopesPlanar)}, w, h);
+    hs.device->launch(GeometryDerivativesInterleavedKernel{packed, hs.planeSet(slopesPacked)}, w,
+                      h);
+    expectSamePlanes(slopesPlanar, slopesPacked, 3, "derivatives");
+    EXPECT_NE(hs.planeSet(slopesPlanar).at(2, hs.layout.index(11, 8)), 0.0f);
 }
 
-// The ingest's interleaved copy holds the normal and depth it writes to the planes, non-finite
-// geometry (made background, 0) included.
-TEST(SvgfKernels, InterleavingIngestWritesThePlanesNormalAndDepth) {
+// The interleaving ingest (the GPU's) writes into the interleaved copy the normal and depth the
+// planar one writes into the planes, non-finite geometry (made background, 0) included, and
+// leaves the planes alone; its other outputs are the planar one's.
+TEST(SvgfKernels, InterleavingIngestWritesThePlanarIngestsNormalAndDepth) {
     const int w = 9, h = 7, n = w * h;
     Harness hs(w, h, 4);
     std::vector<float> beauty(3 * n), normal(3 * n), position(3 * n), depth(n);
@@ -408,45 +416,78 @@ TEST(SvgfKernels, InterleavingIngestWritesThePlanesNormalAndDepth) {
     normal[3 * 10 + 1] = std::numeric_limits<float>::quiet_NaN();
     depth[20] = std::numeric_limits<float>::infinity();
     ids[30] = -1;
-    DeviceBuffer<float> noisy = hs.buffer(3), albedo = hs.buffer(3), guide = hs.buffer(4);
-    std::vector<std::uint8_t> flags(n);
-    hs.device->launch(IngestInterleavedKernel{hs.layout,
-                                              beauty.data(),
-                                              normal.data(),
-                                              position.data(),
-                                              depth.data(),
-                                              ids.data(),
-                                              1,
-                                              nullptr,
-                                              1e-3f,
-                                              hs.planes(noisy),
-                                              hs.planes(albedo),
-                                              hs.planes(hs.normal),
-                                              hs.planes(hs.position),
-                                              hs.depth.data(),
-                                              hs.ids.data(),
-                                              flags.data(),
-                                              {guide.data()}},
-                      w, h);
+    struct Out {
+        DeviceBuffer<float> noisy, albedo, normal, position, depth, guide;
+        DeviceBuffer<std::int32_t> ids;
+        std::vector<std::uint8_t> flags;
+    };
+    auto outputs = [&] {
+        Out o{hs.buffer(3),
+              hs.buffer(3),
+              hs.buffer(3),
+              hs.buffer(3),
+              hs.buffer(1),
+              hs.buffer(4),
+              DeviceBuffer<std::int32_t>(*hs.device, std::size_t(hs.layout.planeSize)),
+              std::vector<std::uint8_t>(n)};
+        for (int i = 0; i < hs.layout.planeSize; ++i) {
+            hs.planes(o.normal).store(i, make3(-7.0f, -7.0f, -7.0f));
+            o.depth.data()[i] = -7.0f;
+        }
+        return o;
+    };
+    auto run = [&]<class Kernel>(Out& o) {
+        hs.device->launch(Kernel{hs.layout,
+                                 beauty.data(),
+                                 normal.data(),
+                                 position.data(),
+                                 depth.data(),
+                                 ids.data(),
+                                 1,
+                                 nullptr,
+                                 1e-3f,
+                                 hs.planes(o.noisy),
+                                 hs.planes(o.albedo),
+                                 hs.planes(o.normal),
+                                 hs.planes(o.position),
+                                 o.depth.data(),
+                                 o.ids.data(),
+                                 o.flags.data(),
+                                 {o.guide.data()}},
+                          w, h);
+    };
+    Out planar = outputs(), packed = outputs();
+    run.template operator()<IngestKernel>(planar);
+    run.template operator()<IngestInterleavedKernel>(packed);
+    EXPECT_EQ(planar.flags, packed.flags);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             auto i = hs.layout.index(x, y);
             Float3 nPacked;
             float zPacked;
-            NormalDepth4{guide.data()}.load(i, nPacked, zPacked);
-            Float3 nPlanar = hs.planes(hs.normal).load(i);
+            NormalDepth4{packed.guide.data()}.load(i, nPacked, zPacked);
+            Float3 nPlanar = hs.planes(planar.normal).load(i);
             EXPECT_EQ(nPacked.x, nPlanar.x);
             EXPECT_EQ(nPacked.y, nPlanar.y);
             EXPECT_EQ(nPacked.z, nPlanar.z);
-            EXPECT_EQ(zPacked, hs.depth.data()[i]);
+            EXPECT_EQ(zPacked, planar.depth.data()[i]);
             EXPECT_EQ(zPacked, (y * w + x == 10 || y * w + x == 20) ? 0.0f : depth[y * w + x]);
+            EXPECT_EQ(hs.planes(packed.normal).load(i).y, -7.0f);  // planes untouched
+            EXPECT_EQ(packed.depth.data()[i], -7.0f);
+            EXPECT_EQ(packed.ids.data()[i], planar.ids.data()[i]);
+            for (int k = 0; k < 3; ++k) {
+                EXPECT_EQ(hs.planeSet(packed.noisy).at(k, i), hs.planeSet(planar.noisy).at(k, i));
+                EXPECT_EQ(hs.planeSet(packed.position).at(k, i),
+                          hs.planeSet(planar.position).at(k, i));
+            }
         }
 }
 
-// The GPU's one-pass temporal stage (SvgfTemporalKernel) against the CPU's three passes
-// (reprojection, 3x3 search, accumulation): the same outputs. The history lies
-// (0.3, 0.2) pixels away; a patch that was another object in the previous frame sends its
-// pixels to the search (some find history there, some none), the anti-lag clamp is on.
+// The GPU's one-pass temporal stage (SvgfTemporalKernel, and its form reading the interleaved
+// guide) against the CPU's three passes (reprojection, 3x3 search, accumulation): the same
+// outputs. The history lies (0.3, 0.2) pixels away; a patch that was another object in the
+// previous frame sends its pixels to the search (some find history there, some none), a strip
+// that was further away fails the depth test, and the anti-lag clamp is on.
 TEST(SvgfKernels, OnePassTemporalStageGivesTheThreePassesResults) {
     const int w = 20, hgt = 16;
     Harness h(w, hgt, 8);
@@ -470,13 +511,19 @@ TEST(SvgfKernels, OnePassTemporalStageGivesTheThreePassesResults) {
             h.planes(radiance).store(i, make3(2.0f * next(), next(), next()));
         }
     ObjectReprojection shift{};
+    // Screen = (x + 0.8, y + 0.7) at w = z = 5, the wall's depth (the depth test compares w).
     shift.currentWorldToPreviousScreen = {
-        {{1, 0, 0, 0.8f}, {0, 1, 0, 0.7f}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
+        {{5, 0, 0, 4.0f}, {0, 5, 0, 3.5f}, {0, 0, 1, 0}, {0, 0, 1, 0}}};
     shift.currentWorldToPreviousWorld = {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
     shift.valid = 1;
     std::vector<ObjectReprojection> objects = {shift, shift};
-    const PreviousGeometry previous{previousIds.data(), h.depth.data(), h.planes(h.normal)};
-    const HistoryTest idOnly{0, 10.0f, 16.0f};
+    // A strip that was further away in the previous frame: the depth test rejects it.
+    DeviceBuffer<float> previousDepth = h.buffer(1);
+    for (int i = 0; i < h.layout.planeSize; ++i) previousDepth.data()[i] = h.depth.data()[i];
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 12; x <= 18; ++x) previousDepth.data()[h.layout.index(x, y)] = 7.0f;
+    const PreviousGeometry previous{previousIds.data(), previousDepth.data(), h.planes(h.normal)};
+    const HistoryTest geometryTests{1, 10.0f, 16.0f};
     h.device->launch(ColorRowSumsKernel{h.gbuffer(), h.planes(radiance), h.sumPlanes(), 3}, w, hgt);
     struct Outputs {
         DeviceBuffer<float> illumination, moments, length, filterInput;
@@ -494,7 +541,7 @@ TEST(SvgfKernels, OnePassTemporalStageGivesTheThreePassesResults) {
                       objects.data(),
                       2,
                       h.planeSet(derivatives),
-                      idOnly,
+                      geometryTests,
                       h.planeSet(feedback),
                       h.planeSet(previousMoments),
                       previousLength.data(),
@@ -525,6 +572,22 @@ TEST(SvgfKernels, OnePassTemporalStageGivesTheThreePassesResults) {
     h.device->launch(SvgfTemporalKernel{reproject.template operator()<SvgfReprojectKernel>(one),
                                         accumulate(one)},
                      w, hgt);
+    // The GPU's form: normals and depths from the interleaved copies (the same geometry serves
+    // as this frame's and the last, as the planes do above).
+    DeviceBuffer<float> guide = h.buffer(4), previousGuide = h.buffer(4);
+    for (int i = 0; i < h.layout.planeSize; ++i) {
+        NormalDepth4{guide.data()}.store(i, h.planes(h.normal).load(i), h.depth.data()[i]);
+        NormalDepth4{previousGuide.data()}.store(i, h.planes(h.normal).load(i),
+                                                 previousDepth.data()[i]);
+    }
+    Outputs packed = outputs();
+    SvgfReprojectKernel packedReproject =
+        reproject.template operator()<SvgfReprojectKernel>(packed);
+    packedReproject.g.normalDepth = {guide.data()};
+    packedReproject.previous.normalDepth = {previousGuide.data()};
+    SvgfAccumulateKernel packedAccumulate = accumulate(packed);
+    packedAccumulate.g.normalDepth = {guide.data()};
+    h.device->launch(SvgfTemporalInterleavedKernel{packedReproject, packedAccumulate}, w, hgt);
     int searched = 0, found = 0;
     // Within rounding: the CPU vectorises the passes but not the one-pass kernel (its search
     // is a branch), and the compiler may contract other multiply-adds in each.
@@ -534,17 +597,19 @@ TEST(SvgfKernels, OnePassTemporalStageGivesTheThreePassesResults) {
     for (int y = 0; y < hgt; ++y)
         for (int x = 0; x < w; ++x) {
             auto i = h.layout.index(x, y);
-            ASSERT_EQ(three.validity.data()[i], one.validity.data()[i]) << x << ", " << y;
-            for (int k = 0; k < 3; ++k)
-                expectClose(h.planeSet(three.illumination).at(k, i),
-                            h.planeSet(one.illumination).at(k, i), "illumination", x, y);
-            for (int k = 0; k < 2; ++k)
-                expectClose(h.planeSet(three.moments).at(k, i), h.planeSet(one.moments).at(k, i),
-                            "moments", x, y);
-            expectClose(three.length.data()[i], one.length.data()[i], "length", x, y);
-            for (int k = 0; k < 4; ++k)
-                expectClose(h.planeSet(three.filterInput).at(k, i),
-                            h.planeSet(one.filterInput).at(k, i), "filter input", x, y);
+            for (Outputs* o : {&one, &packed}) {
+                ASSERT_EQ(three.validity.data()[i], o->validity.data()[i]) << x << ", " << y;
+                for (int k = 0; k < 3; ++k)
+                    expectClose(h.planeSet(three.illumination).at(k, i),
+                                h.planeSet(o->illumination).at(k, i), "illumination", x, y);
+                for (int k = 0; k < 2; ++k)
+                    expectClose(h.planeSet(three.moments).at(k, i), h.planeSet(o->moments).at(k, i),
+                                "moments", x, y);
+                expectClose(three.length.data()[i], o->length.data()[i], "length", x, y);
+                for (int k = 0; k < 4; ++k)
+                    expectClose(h.planeSet(three.filterInput).at(k, i),
+                                h.planeSet(o->filterInput).at(k, i), "filter input", x, y);
+            }
             bool inPatch = x >= 7 && x <= 11 && y >= 5 && y <= 9;
             searched += inPatch ? 1 : 0;
             found += inPatch && one.validity.data()[i] == kReprojectionValid ? 1 : 0;
@@ -552,6 +617,9 @@ TEST(SvgfKernels, OnePassTemporalStageGivesTheThreePassesResults) {
     // The patch's pixels went through the search: some found history, some none.
     EXPECT_GT(found, 0);
     EXPECT_LT(found, searched);
+    // The depth test rejected the strip (x 12-18 in the previous frame), the search too inside.
+    EXPECT_NE(one.validity.data()[h.layout.index(15, 3)], kReprojectionValid);
+    EXPECT_EQ(one.validity.data()[h.layout.index(9, 3)], kReprojectionValid);
 }
 
 TEST(Svgf, HistoryLengthGrowsAndResetsWhereAnObjectUncoversTheWall) {

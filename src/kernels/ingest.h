@@ -12,8 +12,8 @@
 
 namespace rtd {
 
-// InterleavedGuide: also writes normal and depth interleaved (views.h: NormalDepth4), the GPU's
-// copy of the guide the SVGF filters read.
+// InterleavedGuide: writes normal and depth interleaved (views.h: NormalDepth4) instead of their
+// planes, the GPU's layout for SVGF: its passes then read them from there.
 template <bool InterleavedGuide = false>
 struct Ingest {
     Layout layout;
@@ -67,10 +67,13 @@ struct Ingest {
         // Per component, as for the albedo above (a selected vector would stop vectorisation).
         auto finiteOrZero = [geometryFinite](float v) { return geometryFinite ? v : 0.0f; };
         Float3 keptNormal = make3(finiteOrZero(n.x), finiteOrZero(n.y), finiteOrZero(n.z));
-        normal.store(i, keptNormal);
         position.store(i, make3(finiteOrZero(p.x), finiteOrZero(p.y), finiteOrZero(p.z)));
-        depth[i] = finiteOrZero(z);
-        if constexpr (InterleavedGuide) normalDepth.store(i, keptNormal, finiteOrZero(z));
+        if constexpr (InterleavedGuide) {
+            normalDepth.store(i, keptNormal, finiteOrZero(z));
+        } else {
+            normal.store(i, keptNormal);
+            depth[i] = finiteOrZero(z);
+        }
         objectId[i] = kept;
         inputFlags[s] = std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag));
     }

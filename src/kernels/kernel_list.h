@@ -45,6 +45,7 @@ inline constexpr bool
     X(AtrousModulatedKernel)                \
     X(AtrousNarrowNormalModulatedKernel)    \
     X(GeometryDerivativesKernel)            \
+    X(GeometryDerivativesInterleavedKernel) \
     X(ReprojectKernel)                      \
     X(AccumulateKernel)                     \
     X(AccumulateWideKernel)                 \
@@ -54,6 +55,7 @@ inline constexpr bool
     X(SvgfReprojectSearchKernel)            \
     X(SvgfAccumulateKernel)                 \
     X(SvgfTemporalKernel)                   \
+    X(SvgfTemporalInterleavedKernel)        \
     X(SvgfVarianceKernel)                   \
     X(SvgfVarianceNormal128Kernel)          \
     X(SvgfVarianceInterleavedKernel)        \

@@ -30,6 +30,7 @@ struct PreviousGeometry {
     const std::int32_t* objectId;
     const float* depth;
     Planes3 normal;
+    NormalDepth4 normalDepth = {};  // the GPU's: normal and depth interleaved (views.h)
 };
 
 // The previous-frame pixels that may hold pixel i's history, and their weights (summing to 1
@@ -76,8 +77,9 @@ RTD_HOST_DEVICE RTD_INLINE void loadTaps(const Planes3& planes, const HistoryTap
 // safe (clamped) coordinates; needs layout.padding >= 2.
 // KnownId: the caller knows the pixel's object ID (`knownId`, the same for a whole run of pixels
 // on the CPU, parallel_for.h), so the object's matrices are one value for the run rather than
-// gathered per pixel.
-template <bool Search3x3, bool KnownId = false>
+// gathered per pixel. Interleaved: normals and depths from the interleaved copies (views.h), the
+// current frame's and the previous one's.
+template <bool Search3x3, bool KnownId = false, bool Interleaved = false>
 RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     const GBufferView& g, PixelIndex i, const PreviousGeometry& previous,
     const ObjectReprojection* objects, int objectCount, const PlaneSet& derivatives,
@@ -102,8 +104,10 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     sy = onScreen ? sy : 0.0f;
 
     // Rigid motion (or uniform scale) assumed: the rotated normal, renormalised.
-    Float3 expectedNormal =
-        normalize(transformVector(object.currentWorldToPreviousWorld, g.normal.load(i)));
+    Float3 normal;
+    float depth;
+    loadNormalDepth<Interleaved>(g, i, normal, depth);
+    Float3 expectedNormal = normalize(transformVector(object.currentWorldToPreviousWorld, normal));
     float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
     float fwidthDepth = absf(dzdx) + absf(dzdy);
     float fwidthNormal = derivatives.at(2, i);
@@ -124,8 +128,19 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     std::int32_t previousId[kTaps];
     float previousDepth[kTaps], previousNx[kTaps], previousNy[kTaps], previousNz[kTaps];
     loadTaps(previous.objectId, taps, previousId);
-    loadTaps(previous.depth, taps, previousDepth);
-    loadTaps(previous.normal, taps, previousNx, previousNy, previousNz);
+    if constexpr (Interleaved) {
+        RTD_UNROLL
+        for (int t = 0; t < kTaps; ++t) {
+            Float3 n;
+            previous.normalDepth.load(taps.index[t], n, previousDepth[t]);
+            previousNx[t] = n.x;
+            previousNy[t] = n.y;
+            previousNz[t] = n.z;
+        }
+    } else {
+        loadTaps(previous.depth, taps, previousDepth);
+        loadTaps(previous.normal, taps, previousNx, previousNy, previousNz);
+    }
     bool accepted[kTaps];
     float bilinearSum = 0.0f, acceptedCount = 0.0f;
     RTD_UNROLL
@@ -158,18 +173,40 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
 }
 
 // Local depth slope and normal change of each pixel, from its neighbours on the same object
-// (central differences where both exist, one-sided at object edges).
-struct GeometryDerivativesKernel {
+// (central differences where both exist, one-sided at object edges). Interleaved: normal and
+// depth from the interleaved copy (views.h), the GPU's.
+template <bool Interleaved = false>
+struct GeometryDerivatives {
     GBufferView g;
     PlaneSet out;  // 0: dz/dx, 1: dz/dy, 2: fwidth(n) = |n(x+1)-n| + |n(y+1)-n| (or left/up)
 
+    RTD_HOST_DEVICE RTD_INLINE float depthAt(PixelIndex j) const {
+        if constexpr (Interleaved) {
+            Float3 n;
+            float z;
+            g.normalDepth.load(j, n, z);
+            return z;
+        } else {
+            return g.depth[j];
+        }
+    }
+    RTD_HOST_DEVICE RTD_INLINE Float3 normalAt(PixelIndex j) const {
+        if constexpr (Interleaved) {
+            Float3 n;
+            float z;
+            g.normalDepth.load(j, n, z);
+            return n;
+        } else {
+            return g.normal.load(j);
+        }
+    }
     RTD_HOST_DEVICE RTD_INLINE float slope(PixelIndex i, PixelIndex step) const {
         std::int32_t id = g.objectId[i];
         bool before = g.objectId[i - step] == id, after = g.objectId[i + step] == id;
-        float z = g.depth[i];
-        if (before && after) return 0.5f * (g.depth[i + step] - g.depth[i - step]);
-        if (after) return g.depth[i + step] - z;
-        if (before) return z - g.depth[i - step];
+        float z = depthAt(i);
+        if (before && after) return 0.5f * (depthAt(i + step) - depthAt(i - step));
+        if (after) return depthAt(i + step) - z;
+        if (before) return z - depthAt(i - step);
         return 0.0f;
     }
     RTD_HOST_DEVICE RTD_INLINE float normalChange(PixelIndex i, PixelIndex step) const {
@@ -177,8 +214,7 @@ struct GeometryDerivativesKernel {
         bool after = g.objectId[i + step] == id, before = g.objectId[i - step] == id;
         // Selects between loaded neighbours, not a chosen index: the CPU then loads contiguous
         // vectors rather than gathering.
-        Float3 n = g.normal.load(i), nAfter = g.normal.load(i + step),
-               nBefore = g.normal.load(i - step);
+        Float3 n = normalAt(i), nAfter = normalAt(i + step), nBefore = normalAt(i - step);
         Float3 dAfter = nAfter - n, dBefore = nBefore - n;
         float dx = after ? dAfter.x : before ? dBefore.x : 0.0f;
         float dy = after ? dAfter.y : before ? dBefore.y : 0.0f;
@@ -194,11 +230,16 @@ struct GeometryDerivativesKernel {
             out.at(2, i) = 0.0f;
             return;
         }
-        out.at(0, i) = slope(i, 1);
-        out.at(1, i) = slope(i, L.pitch);
-        out.at(2, i) = normalChange(i, 1) + normalChange(i, L.pitch);
+        // All read before any store (the stores could alias the inputs for the compiler).
+        float dzdx = slope(i, 1), dzdy = slope(i, L.pitch);
+        float fwidthNormal = normalChange(i, 1) + normalChange(i, L.pitch);
+        out.at(0, i) = dzdx;
+        out.at(1, i) = dzdy;
+        out.at(2, i) = fwidthNormal;
     }
 };
+using GeometryDerivativesKernel = GeometryDerivatives<false>;
+using GeometryDerivativesInterleavedKernel = GeometryDerivatives<true>;
 
 // The assignment's pipeline: history colour at each pixel (0 where invalid) and why.
 struct ReprojectKernel {

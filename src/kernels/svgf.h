@@ -137,11 +137,12 @@ struct SvgfReproject {
         history.at(5, i) = s.length;
     }
     // The history at pixel i and its validity code (reads only the previous frame's data).
-    template <bool KnownId>
+    // Interleaved: normals and depths from the interleaved copies (findHistory).
+    template <bool KnownId, bool Interleaved = false>
     RTD_HOST_DEVICE RTD_INLINE SvgfHistorySample sample(PixelIndex i, std::int32_t id,
                                                         std::uint8_t& code) const {
-        auto taps = findHistory<Search3x3, KnownId>(g, i, previous, objects, objectCount,
-                                                    derivatives, test, hasHistory, id);
+        auto taps = findHistory<Search3x3, KnownId, Interleaved>(
+            g, i, previous, objects, objectCount, derivatives, test, hasHistory, id);
         code = taps.code;
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps], means[kTaps], variances[kTaps], lengths[kTaps];
@@ -249,8 +250,10 @@ struct SvgfAccumulateKernel {
 // taps all failed, and accumulation, the history kept in registers (no history planes written
 // and read back). Its parts are the three kernels' own code; `accumulate.history` and
 // `.validity` are unused, `reproject.history` too. The CPU runs the three passes instead: there
-// the search's branch would stop the vectorisation of the whole pass.
-struct SvgfTemporalKernel {
+// the search's branch would stop the vectorisation of the whole pass. Interleaved: normals and
+// depths from the interleaved copies (views.h).
+template <bool Interleaved = false>
+struct SvgfTemporal {
     SvgfReprojectKernel reproject;
     SvgfAccumulateKernel accumulate;
 
@@ -258,7 +261,7 @@ struct SvgfTemporalKernel {
         const GBufferView& g = reproject.g;
         PixelIndex i = g.layout.index(x, y);
         std::uint8_t code;
-        SvgfHistorySample s = reproject.sample<false>(i, 0, code);
+        SvgfHistorySample s = reproject.template sample<false, Interleaved>(i, 0, code);
         if (code == kReprojectionOtherObject && g.objectId[i] >= 0) {
             SvgfReprojectSearchKernel search{reproject.g,
                                              reproject.previous,
@@ -272,12 +275,14 @@ struct SvgfTemporalKernel {
                                              reproject.history,
                                              reproject.validity,
                                              reproject.hasHistory};
-            s = search.sample<false>(i, 0, code);
+            s = search.template sample<false, Interleaved>(i, 0, code);
         }
         reproject.validity[i] = code;
         accumulate.accumulate(i, s, code == kReprojectionValid);
     }
 };
+using SvgfTemporalKernel = SvgfTemporal<false>;
+using SvgfTemporalInterleavedKernel = SvgfTemporal<true>;
 
 // Variance where fewer than `shortHistory` frames are accumulated: from the moments of a 7x7
 // edge-aware neighbourhood (which also filters the illumination), boosted by shortHistory / h
@@ -316,8 +321,10 @@ struct SvgfVariance {
         AcceptedIds accepted = acceptedIds(terms.separateObjects, id);
         float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
         // No variance yet: phi_l = sigma_l.
-        SvgfCentre centre{g.depth[i], g.normal.load(i), luminance(c),
-                          kLog2e / terms.sigmaLuminance};
+        Float3 normalI;
+        float depthI;
+        loadNormalDepth<InterleavedGuide>(g, i, normalI, depthI);
+        SvgfCentre centre{depthI, normalI, luminance(c), kLog2e / terms.sigmaLuminance};
         // The neighbourhood's luminance variance, with each tap's mean taken relative to the
         // centre's (shifted data: no cancellation). The centre: weight 1, shifted mean 0.
         float centreMean = moments.at(0, i);
@@ -413,8 +420,11 @@ struct SvgfAtrous {
                 prefiltered += m * in.at(3, j);
                 prefilterW += m;
             }
+        Float3 normalI;
+        float depthI;
+        loadNormalDepth<InterleavedGuide>(g, i, normalI, depthI);
         SvgfCentre c{
-            g.depth[i], g.normal.load(i), luminance(cI),
+            depthI, normalI, luminance(cI),
             kLog2e /
                 (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f)};
         // The depth change over one tap step.
