@@ -21,9 +21,10 @@ class Device {
     // max(0, n.n')^128 is then cheaper as exp2(128 log2(n.n')) inside the weight's exponent than
     // as 7 squarings. On the CPU log2 is a polynomial and the squarings win.
     virtual bool hasFastLogarithm() const { return false; }
-    // True where the SVGF filters read their guide (normal, depth) interleaved, one 16-byte
-    // load per tap (a GPU), rather than from planes that load as contiguous vectors (a CPU).
-    // Such a device also has a fast logarithm: the interleaved kernels use the log2 form.
+    // True where SVGF keeps normal and depth interleaved, one 16-byte load per tap (a GPU),
+    // rather than in planes that load as contiguous vectors (a CPU). Such a device also has a
+    // fast logarithm (the interleaved kernels use the log2 form) and prefers fused passes (the
+    // temporal stage reads the interleaved copies in its one-pass form only).
     virtual bool interleavesGuide() const { return false; }
     // True where passes the CPU keeps apart run better as one (a GPU): there a pass's
     // intermediate planes cost a round trip through memory, and a rare branch (SVGF's 3x3
