@@ -10,7 +10,7 @@ pattern="${1:-FixedStride<rtd::(Atrous|SvgfAtrous)<.*, 4>}"
 nvcc="${NVCC:-$(command -v nvcc || echo /usr/local/cuda/bin/nvcc)}"
 ptx=$(mktemp --suffix=.ptx)
 trap 'rm -f "$ptx"' EXIT
-"$nvcc" -O3 -DNDEBUG -DRTD_HAS_CUDA=1 -arch=sm_90 -std=c++17 --expt-relaxed-constexpr \
+"$nvcc" -O3 -DNDEBUG -DRTD_HAS_CUDA=1 -arch=sm_90 -std=c++17 --expt-relaxed-constexpr --ftz=true \
     -I include -I src -ptx src/devices/cuda/cuda_device.cu -o "$ptx"
 python3 - "$ptx" "$pattern" <<'PY'
 import re, subprocess, sys

@@ -180,25 +180,18 @@ struct GeometryDerivatives {
     GBufferView g;
     PlaneSet out;  // 0: dz/dx, 1: dz/dy, 2: fwidth(n) = |n(x+1)-n| + |n(y+1)-n| (or left/up)
 
+    // (The half a caller does not use is never loaded: dead loads are dropped.)
     RTD_HOST_DEVICE RTD_INLINE float depthAt(PixelIndex j) const {
-        if constexpr (Interleaved) {
-            Float3 n;
-            float z;
-            g.normalDepth.load(j, n, z);
-            return z;
-        } else {
-            return g.depth[j];
-        }
+        Float3 n;
+        float z;
+        loadNormalDepth<Interleaved>(g, j, n, z);
+        return z;
     }
     RTD_HOST_DEVICE RTD_INLINE Float3 normalAt(PixelIndex j) const {
-        if constexpr (Interleaved) {
-            Float3 n;
-            float z;
-            g.normalDepth.load(j, n, z);
-            return n;
-        } else {
-            return g.normal.load(j);
-        }
+        Float3 n;
+        float z;
+        loadNormalDepth<Interleaved>(g, j, n, z);
+        return n;
     }
     RTD_HOST_DEVICE RTD_INLINE float slope(PixelIndex i, PixelIndex step) const {
         std::int32_t id = g.objectId[i];
