@@ -137,12 +137,13 @@ struct SvgfReproject {
         history.at(5, i) = s.length;
     }
     // The history at pixel i and its validity code (reads only the previous frame's data).
-    // Interleaved: normals and depths from the interleaved copies (findHistory).
-    template <bool KnownId, bool Interleaved = false>
+    // Interleaved: normals and depths from the interleaved copies (findHistory). Search: with
+    // the 3x3 search or not (the one-pass stage runs both forms from one kernel's fields).
+    template <bool KnownId, bool Interleaved = false, bool Search = Search3x3>
     RTD_HOST_DEVICE RTD_INLINE SvgfHistorySample sample(PixelIndex i, std::int32_t id,
                                                         std::uint8_t& code) const {
-        auto taps = findHistory<Search3x3, KnownId, Interleaved>(
-            g, i, previous, objects, objectCount, derivatives, test, hasHistory, id);
+        auto taps = findHistory<Search, KnownId, Interleaved>(g, i, previous, objects, objectCount,
+                                                              derivatives, test, hasHistory, id);
         code = taps.code;
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps], means[kTaps], variances[kTaps], lengths[kTaps];
@@ -262,21 +263,8 @@ struct SvgfTemporal {
         PixelIndex i = g.layout.index(x, y);
         std::uint8_t code;
         SvgfHistorySample s = reproject.template sample<false, Interleaved>(i, 0, code);
-        if (code == kReprojectionOtherObject && g.objectId[i] >= 0) {
-            SvgfReprojectSearchKernel search{reproject.g,
-                                             reproject.previous,
-                                             reproject.objects,
-                                             reproject.objectCount,
-                                             reproject.derivatives,
-                                             reproject.test,
-                                             reproject.previousIllumination,
-                                             reproject.previousMoments,
-                                             reproject.previousLength,
-                                             reproject.history,
-                                             reproject.validity,
-                                             reproject.hasHistory};
-            s = search.template sample<false, Interleaved>(i, 0, code);
-        }
+        if (code == kReprojectionOtherObject && g.objectId[i] >= 0)
+            s = reproject.template sample<false, Interleaved, true>(i, 0, code);
         reproject.validity[i] = code;
         accumulate.accumulate(i, s, code == kReprojectionValid);
     }

@@ -29,14 +29,6 @@ void check(cudaError_t status, const char* what) {
 //   0.131-0.165 -> 0.123-0.140 ms, the variance 0.108 -> 0.058. With the guide interleaved
 //   (views.h: NormalDepth4) the variance is back at the default: 0.054 -> 0.051 ms.
 constexpr int kThreadsPerBlock = 128;
-template <class Kernel>
-inline constexpr int kMinBlocksPerSm = 6;
-template <bool NarrowNormal, bool Modulated>
-inline constexpr int kMinBlocksPerSm<Atrous<NarrowNormal, Modulated>> = 4;
-template <int NormalSquarings, bool Modulated, bool Interleaved>
-inline constexpr int kMinBlocksPerSm<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> = 5;
-template <int NormalSquarings>
-inline constexpr int kMinBlocksPerSm<SvgfVariance<NormalSquarings, false>> = 5;
 
 // The A-Trous iterations with their stride as a compile-time constant (Kernel::filter<Stride>):
 // each tap row then needs one address per plane, its five taps' loads taking their column
@@ -56,28 +48,48 @@ struct FixedStride {
         kernel.template filter<Stride>(x, y);
     }
 };
+
+// How each kernel is launched, one entry per kernel family: kMinBlocks, its register budget (the
+// minimum of resident blocks per SM, above; 3 allows 170 registers); kFixedStridesUpTo, the
+// strides up to which it runs as FixedStride<Kernel, s>; fixedStrideMinBlocks(s), their budget
+// (where there are such strides).
+struct DefaultLaunch {
+    static constexpr int kMinBlocks = 6;
+    static constexpr int kFixedStridesUpTo = 0;
+};
 template <class Kernel>
-inline constexpr int kFixedStridesUpTo = 0;
-template <bool NarrowNormal, bool Modulated>
-inline constexpr int kFixedStridesUpTo<Atrous<NarrowNormal, Modulated>> = 16;
-template <int NormalSquarings, bool Modulated, bool Interleaved>
-inline constexpr int kFixedStridesUpTo<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> = 16;
-// Their register budget: 3 blocks of 128 threads allow 170 registers, 4 128, 5 102. SVGF's with
-// the guide interleaved: 128 at stride 1, 102 from stride 2 (102 against 128 at strides 1-16:
-// 0.094, 0.097, 0.100, 0.098, 0.108 -> 0.100, 0.094, 0.100, 0.099, 0.099 ms).
+struct LaunchTraits : DefaultLaunch {};
 // The course's: 128 at stride 1, 170 from stride 2 (128 against 170 at strides 1-16: 0.152,
 // 0.152, 0.158, 0.155, 0.155 -> 0.143, 0.151, 0.160, 0.158, 0.159 ms; modulated at 16: 0.173 ->
 // 0.186).
-template <bool NarrowNormal, bool Modulated, int Stride>
-inline constexpr int kMinBlocksPerSm<FixedStride<Atrous<NarrowNormal, Modulated>, Stride>> =
-    Stride == 1 ? 4 : 3;
-template <int NormalSquarings, bool Modulated, bool Interleaved, int Stride>
-inline constexpr int
-    kMinBlocksPerSm<FixedStride<SvgfAtrous<NormalSquarings, Modulated, Interleaved>, Stride>> =
-        (Interleaved && Stride > 1) ? 5 : 4;
+template <bool NarrowNormal, bool Modulated>
+struct LaunchTraits<Atrous<NarrowNormal, Modulated>> : DefaultLaunch {
+    static constexpr int kMinBlocks = 4;
+    static constexpr int kFixedStridesUpTo = 16;
+    static constexpr int fixedStrideMinBlocks(int stride) { return stride == 1 ? 4 : 3; }
+};
+// SVGF's with the guide interleaved: 128 at stride 1, 102 from stride 2 (102 against 128 at
+// strides 1-16: 0.094, 0.097, 0.100, 0.098, 0.108 -> 0.100, 0.094, 0.100, 0.099, 0.099 ms).
+template <int NormalSquarings, bool Modulated, bool Interleaved>
+struct LaunchTraits<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> : DefaultLaunch {
+    static constexpr int kMinBlocks = 5;
+    static constexpr int kFixedStridesUpTo = 16;
+    static constexpr int fixedStrideMinBlocks(int stride) {
+        return Interleaved && stride > 1 ? 5 : 4;
+    }
+};
+// The planar variance (the interleaved one keeps the default, see above).
+template <int NormalSquarings>
+struct LaunchTraits<SvgfVariance<NormalSquarings, false>> : DefaultLaunch {
+    static constexpr int kMinBlocks = 5;
+};
+template <class Kernel, int Stride>
+struct LaunchTraits<FixedStride<Kernel, Stride>> : DefaultLaunch {
+    static constexpr int kMinBlocks = LaunchTraits<Kernel>::fixedStrideMinBlocks(Stride);
+};
 
 template <class Kernel>
-__global__ void __launch_bounds__(kThreadsPerBlock, kMinBlocksPerSm<Kernel>)
+__global__ void __launch_bounds__(kThreadsPerBlock, LaunchTraits<Kernel>::kMinBlocks)
     runKernel2D(Kernel kernel, int width, int height) {
     int x = int(blockIdx.x * blockDim.x + threadIdx.x);
     int y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -235,7 +247,7 @@ class CudaDevice final : public Device {
     // The kernel as FixedStride<Kernel, s> when its stride s is one of those, else as it is.
     template <class Kernel, int Stride = 1>
     void launchOn(const Kernel& kernel, dim3 grid, dim3 block, int width, int height) {
-        if constexpr (Stride <= kFixedStridesUpTo<Kernel>) {
+        if constexpr (Stride <= LaunchTraits<Kernel>::kFixedStridesUpTo) {
             if (kernel.tapRowStride() == Stride)
                 runKernel2D<<<grid, block, 0, stream_>>>(FixedStride<Kernel, Stride>{kernel}, width,
                                                          height);
