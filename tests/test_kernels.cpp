@@ -43,6 +43,29 @@ TEST(FastMath, AcosMatchesStdAcos) {
     EXPECT_NEAR(acosFast(-1.0000001f), 3.14159265f, 1e-6f);
 }
 
+// The narrow normal term's acos(c)^2 = (1 - c) q(c): close to the standard library's where
+// the term is small enough to matter, and never smaller than at c = 0.6 further out (a weight of
+// e^-30 or less for any sigma_normal with OppositeNormalsVanish), opposite normals included.
+TEST(FastMath, NarrowNormalTermMatchesAcosSquaredNearOneAndStaysLargeBelow) {
+    for (float c = 0.6f; c < 1.0f; c += 1e-4f) {
+        double expected = std::acos(double(c)) * std::acos(double(c));
+        EXPECT_NEAR(normalAngleSquared<true>(c), expected, 2e-6 * expected) << "c = " << c;
+    }
+    EXPECT_EQ(normalAngleSquared<true>(1.0f), 0.0f);
+    EXPECT_EQ(normalAngleSquared<true>(1.0001f), 0.0f);  // normals a little longer than 1
+    const float atBoundary = normalAngleSquared<true>(0.6f);
+    EXPECT_GE(atBoundary, 0.8598f);  // acos(0.6)^2 = 0.85988
+    EdgeStoppingTerms widestNarrow{1.0f, 88.0f / 2.4674011f, 1.0f, 1};
+    ASSERT_TRUE(oppositeNormalsVanish(widestNarrow));
+    EXPECT_LT(std::exp(-widestNarrow.normalScale * atBoundary), 1e-13);
+    float previous = atBoundary;
+    for (float c = 0.6f; c >= -1.0f; c -= 0.01f) {
+        float v = normalAngleSquared<true>(c);
+        EXPECT_GE(v, previous) << "c = " << c;
+        previous = v;
+    }
+}
+
 TEST(FastMath, MatrixInverseRoundTrips) {
     Mat4 a{{{2, 0, 0, 1}, {0, 3, 0, 2}, {0, 0, 4, 3}, {0, 0, 0, 1}}};
     Mat4 inverse;

@@ -71,6 +71,15 @@ RTD_HOST_DEVICE RTD_INLINE float saturate(float x) {
     return clampf(x, 0.0f, 1.0f);
 #endif
 }
+// min(x, 1) for callers to which a negative x read as 0 gives the same answer: on the GPU the
+// saturation modifier (free), on the CPU one instruction rather than saturate's two.
+RTD_HOST_DEVICE RTD_INLINE float atMostOneOrSaturated(float x) {
+#if defined(__CUDA_ARCH__)
+    return __saturatef(x);
+#else
+    return minf(x, 1.0f);
+#endif
+}
 // |x|: a sign-bit mask on the CPU, an operand modifier (no instruction) on the GPU.
 RTD_HOST_DEVICE RTD_INLINE float absf(float x) {
     return std::fabs(x);
@@ -182,12 +191,14 @@ RTD_HOST_DEVICE RTD_INLINE float acosSqrtFactor(float a) {
                       1.93479445e-2f, -4.33703996e-3f);
 }
 
-// q(a) with acos(a)^2 = (1 - a) q(a) on [0, 1]: a degree-5 near-minimax fit (relative error
-// 2e-6, as acos(a) = sqrt((1 - a) q(a)): 1.6e-6 rad). D_normal^2 with no square root and no
-// squaring.
-RTD_HOST_DEVICE RTD_INLINE float acosSquaredFactor(float a) {
-    return polynomial(a, 2.46739602f, -6.73802674e-1f, 3.20827037e-1f, -1.73369169e-1f,
-                      7.60789290e-2f, -1.71342585e-2f);
+// q(a) with acos(a)^2 = (1 - a) q(a), fitted where a filter's narrow normal term needs it:
+// a degree-3 near-minimax fit on [0.6, 1] (relative error 1.5e-6, as acos(a): 7.5e-7 relative).
+// Below 0.6 it keeps growing as a falls (to 3.3 at -1), so (1 - a) q(a) >= acos(0.6)^2 = 0.86
+// there, where a narrow normal term's weight is e^-30 or less anyway (OppositeNormalsVanish,
+// edge_stopping.h). Two multiply-adds fewer per tap than a fit on all of [0, 1] of equal
+// accuracy (scripts/fit_polynomials.py fits both this and exp2Negative's polynomial).
+RTD_HOST_DEVICE RTD_INLINE float acosSquaredFactorNearOne(float a) {
+    return polynomial(a, 2.45852923f, -6.22350633e-1f, 2.02668637e-1f, -3.88501473e-2f);
 }
 
 // arccos on [-1, 1] (input clamped): acos(|x|) = sqrt(1 - |x|) p(|x|), reflected for x < 0.

@@ -16,21 +16,24 @@ struct EdgeStoppingTerms {
     int separateObjects;  // 1: taps on another object ID get weight 0
 };
 
-// True when normals more than 90 degrees apart weigh nothing at float precision:
-// (pi/2)^2 / 2sn^2 >= 88 (sigma_normal <= 0.118, the assignment's 0.1 included) makes their
-// weight e^-88 or less, under 2^-126.
+// True when normals far apart weigh nothing at float precision: (pi/2)^2 / 2sn^2 >= 88
+// (sigma_normal <= 0.118, the assignment's 0.1 included) makes the weight of normals 90 degrees
+// apart e^-88 or less, under 2^-126, and that of normals 53 degrees apart (cosine 0.6) e^-30 or
+// less, under 1e-13 of a centre tap's: the normal term then needs to be exact only near c = 1.
 inline bool oppositeNormalsVanish(const EdgeStoppingTerms& t) {
     return t.normalScale * 2.4674011f >= 88.0f;
 }
 
-// D_normal^2 = acos(c)^2. OppositeNormalsVanish (see above): c < 0 may then be read as 0, whose
-// (pi/2)^2 weighs nothing too, and on [0, 1] acos(c)^2 = (1 - c) q(c) (acosSquaredFactor) needs
-// no square root.
+// D_normal^2 = acos(c)^2. OppositeNormalsVanish (see above): acos(c)^2 = (1 - c) q(c) with q
+// fitted on [0.6, 1] (acosSquaredFactorNearOne) needs no square root; below 0.6 the weight is
+// e^-30 or less (sigma_normal <= 0.118 and (1 - c) q(c) >= 0.86) for the fit as for acos, so
+// normals further apart, opposite ones included, weigh nothing either way. c is capped at 1
+// (normals a little longer than 1 would otherwise weigh more than parallel ones).
 template <bool OppositeNormalsVanish>
 RTD_HOST_DEVICE RTD_INLINE float normalAngleSquared(float cosine) {
     if constexpr (OppositeNormalsVanish) {
-        float c = saturate(cosine);
-        return (1.0f - c) * acosSquaredFactor(c);
+        float c = atMostOneOrSaturated(cosine);
+        return (1.0f - c) * acosSquaredFactorNearOne(c);
     } else {
         return square(acosFast(cosine));
     }
@@ -82,8 +85,8 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppin
     float normalTerm;
     if constexpr (OppositeNormalsVanish) {
         // (1 - c) q(c) / 2sn^2, the scale entering as (s - s c): no multiplication.
-        float cc = saturate(cosine);
-        normalTerm = (t.normalScale - t.normalScale * cc) * acosSquaredFactor(cc) - bias;
+        float cc = atMostOneOrSaturated(cosine);
+        normalTerm = (t.normalScale - t.normalScale * cc) * acosSquaredFactorNearOne(cc) - bias;
     } else {
         normalTerm = normalAngleSquared<false>(cosine) * t.normalScale - bias;
     }
