@@ -300,7 +300,13 @@ struct SvgfVariance {
     }
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        if (!active(x, y)) return;
+        // As in SvgfAtrous: the GPU's form (InterleavedGuide) skips inactive pixels by a branch;
+        // the CPU's computes every lane of an active run and keeps the inactive lanes' values
+        // (a branch would mask every tap load).
+        const bool isActive = active(x, y);
+        if constexpr (InterleavedGuide) {
+            if (!isActive) return;
+        }
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 c = illumination.load(i);
@@ -342,8 +348,18 @@ struct SvgfVariance {
             }
         }
         float inv = 1.0f / sumW;  // >= 1, the centre's
-        out.rgb().store(i, sum * inv);
-        out.at(3, i) = maxf(m2 * inv - square(m1 * inv), 0.0f) * (shortHistory / maxf(h, 1.0f));
+        Float3 filtered = sum * inv;
+        float variance =
+            maxf(m2 * inv - square(m1 * inv), 0.0f) * (shortHistory / maxf(h, 1.0f));
+        if constexpr (!InterleavedGuide) {
+            // Per component (a selected vector would stop the CPU vectorising the kernel).
+            Float3 kept = out.rgb().load(i);
+            filtered = make3(isActive ? filtered.x : kept.x, isActive ? filtered.y : kept.y,
+                             isActive ? filtered.z : kept.z);
+            variance = isActive ? variance : out.at(3, i);
+        }
+        out.rgb().store(i, filtered);
+        out.at(3, i) = variance;
     }
 };
 using SvgfVarianceKernel = SvgfVariance<-1>;  // any sigma_n
