@@ -488,7 +488,7 @@ struct Denoiser::Impl {
                 };
                 if (interleavedGuide)
                     run.template operator()<SvgfVarianceInterleavedKernel>();
-                else if (normalFactorBySquarings(wide) && !device->hasFastLogarithm())
+                else if (hasPaperSigmaNormal(wide) && !device->hasFastLogarithm())
                     run.template operator()<SvgfVarianceNormal128Kernel>();
                 else
                     run.template operator()<SvgfVarianceKernel>();
@@ -506,27 +506,27 @@ struct Denoiser::Impl {
             // history too: then its slot is written and a modulate pass follows.
             bool last = it == sv.iterations - 1;
             bool modulated = last && !isFeedback;
-            addPass(
-                fmt::format("svgf-atrous{}", it),
-                withModulation(modulated, {slotName(src), "normal", "depth", "derivatives"}),
-                {modulated ? std::string("output") : slotName(dst)},
-                [this, terms, stride, src, dst, modulated] {
-                    auto run = [&]<class Kernel>() {
-                        launch(Kernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
-                                      planeSet(slot(dst)), stride, terms, planes(albedo),
-                                      outputTarget});
-                    };
-                    bool squarings = normalFactorBySquarings(terms) && !device->hasFastLogarithm();
-                    if (interleavedGuide)
-                        modulated ? run.template operator()<SvgfAtrousInterleavedModulatedKernel>()
-                                  : run.template operator()<SvgfAtrousInterleavedKernel>();
-                    else if (modulated)
-                        squarings ? run.template operator()<SvgfAtrousNormal128ModulatedKernel>()
-                                  : run.template operator()<SvgfAtrousModulatedKernel>();
-                    else
-                        squarings ? run.template operator()<SvgfAtrousNormal128Kernel>()
-                                  : run.template operator()<SvgfAtrousKernel>();
-                });
+            addPass(fmt::format("svgf-atrous{}", it),
+                    withModulation(modulated, {slotName(src), "normal", "depth", "derivatives"}),
+                    {modulated ? std::string("output") : slotName(dst)},
+                    [this, terms, stride, src, dst, modulated] {
+                        auto run = [&]<class Kernel>() {
+                            launch(Kernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
+                                          planeSet(slot(dst)), stride, terms, planes(albedo),
+                                          outputTarget});
+                        };
+                        bool sigma128 = hasPaperSigmaNormal(terms) && !device->hasFastLogarithm();
+                        if (interleavedGuide)
+                            modulated
+                                ? run.template operator()<SvgfAtrousInterleavedModulatedKernel>()
+                                : run.template operator()<SvgfAtrousInterleavedKernel>();
+                        else if (modulated)
+                            sigma128 ? run.template operator()<SvgfAtrousNormal128ModulatedKernel>()
+                                     : run.template operator()<SvgfAtrousModulatedKernel>();
+                        else
+                            sigma128 ? run.template operator()<SvgfAtrousNormal128Kernel>()
+                                     : run.template operator()<SvgfAtrousKernel>();
+                    });
             src = dst;
             if (last && !modulated) addModulatePass(slotName(dst), slot(dst));
         }

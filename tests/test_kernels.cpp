@@ -66,6 +66,24 @@ TEST(FastMath, NarrowNormalTermMatchesAcosSquaredNearOneAndStaysLargeBelow) {
     }
 }
 
+// SVGF's fixed-sigma normal factor: -log2(c) = (1 - c) L(c) close to the standard library's
+// on [0.8, 1], and never smaller than at 0.8 further out (a factor of 2^-41 or less for
+// sigma_n = 128), opposite normals included.
+TEST(FastMath, NegLog2NearOneMatchesTheLogarithmAndStaysLargeBelow) {
+    for (float c = 0.8f; c < 1.0f; c += 1e-4f) {
+        double expected = -std::log2(double(c));
+        EXPECT_NEAR((1.0f - c) * negLog2FactorNearOne(c), expected, 5e-7 * expected) << "c = " << c;
+    }
+    EXPECT_NEAR(negLog2FactorNearOne(1.0f), 1.0 / std::log(2.0), 3e-7);
+    float previous = (1.0f - 0.8f) * negLog2FactorNearOne(0.8f);
+    EXPECT_GE(previous, kNegLog2NearOneFloor);
+    for (float c = 0.8f; c >= -1.0f; c -= 0.01f) {
+        float v = (1.0f - c) * negLog2FactorNearOne(c);
+        EXPECT_GE(v, previous) << "c = " << c;
+        previous = v;
+    }
+}
+
 TEST(FastMath, MatrixInverseRoundTrips) {
     Mat4 a{{{2, 0, 0, 1}, {0, 3, 0, 2}, {0, 0, 4, 3}, {0, 0, 0, 1}}};
     Mat4 inverse;

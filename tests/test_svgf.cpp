@@ -72,34 +72,34 @@ TEST(SvgfKernels, ModulatedIterationWritesTheResultTimesTheAlbedoInterleavedInst
                                               h.planes(albedo).load(h.layout.index(3, 4)).x);
 }
 
-TEST(SvgfKernels, NormalPowerBySquaringsMatchesThePower) {
-    // sigma_n = 128 by seven squarings against max(0, n.n')^128 in double precision, from
-    // parallel normals to opposite ones: within the squarings' rounding (each doubles the
-    // relative error: about 128 ulp) plus exp2's 1e-7.
+TEST(SvgfKernels, FixedSigmaNormalFactorMatchesThePower) {
+    // sigma_n = 128 fixed (the polynomial for -log2 near 1) against max(0, n.n')^128 in double
+    // precision, from parallel normals to opposite ones: within 128 times the rounding of n.n'
+    // and the fit's 2.2e-7 relative in the exponent, plus exp2's 1e-7.
     const SvgfCentre centre{0.0f, make3(0.0f, 0.0f, 1.0f), 0.0f, 0.0f};
     int weighty = 0;
     for (int k = 0; k <= 2000; ++k) {
         double angle = 3.14159265358979 * k / 2000.0;
         Float3 n = make3(float(std::sin(angle)), 0.0f, float(std::cos(angle)));
         double expected = std::pow(std::max(double(n.z), 0.0), 128.0);  // n . (0, 0, 1)
-        float w = svgfWeight<kPaperNormalSquarings>(paperTerms(), centre, 0.0f, 0.0f, n, 0.0f);
+        float w = svgfWeight<kPaperSigmaNormal>(paperTerms(), centre, 0.0f, 0.0f, n, 0.0f);
         EXPECT_NEAR(w, expected, 2e-5 * expected + 1e-12) << "angle " << angle;
         weighty += expected > 1e-3 ? 1 : 0;
     }
     EXPECT_GT(weighty, 20);  // the sweep covers the weights that matter
-    EXPECT_EQ(svgfWeight<kPaperNormalSquarings>(paperTerms(), centre, 0.0f, 0.0f,
-                                                make3(0.0f, 0.0f, 1.0f), 0.0f),
+    EXPECT_EQ(svgfWeight<kPaperSigmaNormal>(paperTerms(), centre, 0.0f, 0.0f,
+                                            make3(0.0f, 0.0f, 1.0f), 0.0f),
               1.0f);  // parallel normals: exactly 1
-    EXPECT_EQ(svgfWeight<kPaperNormalSquarings>(paperTerms(), centre, 0.0f, 0.0f,
-                                                make3(0.0f, 0.0f, -1.0f), 0.0f),
-              0.0f);  // opposite ones: exactly 0
+    EXPECT_LE(svgfWeight<kPaperSigmaNormal>(paperTerms(), centre, 0.0f, 0.0f,
+                                            make3(0.0f, 0.0f, -1.0f), 0.0f),
+              0x1p-126f);  // opposite ones: exp2's floor, nothing next to the centre's 1
 }
 
-TEST(SvgfKernels, NormalPowerBySquaringsEqualsTheLogarithmForm) {
-    // sigma_n = 128 both ways (7 squarings; exp of 128 ln n.n') over normals tilted by up to
-    // ~25 degrees (weights from 1 down to ~1e-6) and a noisy colour: the same output.
+TEST(SvgfKernels, FixedSigmaNormalFormEqualsTheLogarithmForm) {
+    // sigma_n = 128 both ways (fixed, the CPU's; 128 log2 n.n', the GPU's) over normals tilted by
+    // up to ~25 degrees (weights from 1 down to ~1e-6) and a noisy colour: the same output.
     Harness h(24, 24, 8);
-    DeviceBuffer<float> in = h.buffer(4), generic = h.buffer(4), squarings = h.buffer(4),
+    DeviceBuffer<float> in = h.buffer(4), generic = h.buffer(4), fixedSigma = h.buffer(4),
                         derivatives = h.buffer(3);
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> tilt(-0.45f, 0.45f), value(0.2f, 1.0f);
@@ -116,13 +116,13 @@ TEST(SvgfKernels, NormalPowerBySquaringsEqualsTheLogarithmForm) {
                          24, 24);
         h.device->launch(
             SvgfAtrousNormal128Kernel{h.gbuffer(), h.planeSet(derivatives), h.planeSet(in),
-                                      h.planeSet(squarings), stride, paperTerms()},
+                                      h.planeSet(fixedSigma), stride, paperTerms()},
             24, 24);
         for (int y = 0; y < 24; ++y)
             for (int x = 0; x < 24; ++x) {
                 auto i = h.layout.index(x, y);
                 for (int c = 0; c < 4; ++c)
-                    EXPECT_NEAR(h.planeSet(squarings).at(c, i), h.planeSet(generic).at(c, i),
+                    EXPECT_NEAR(h.planeSet(fixedSigma).at(c, i), h.planeSet(generic).at(c, i),
                                 2e-5f * std::abs(h.planeSet(generic).at(c, i)) + 1e-7f)
                         << "stride " << stride << " (" << x << ", " << y << ") plane " << c;
             }

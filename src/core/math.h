@@ -192,14 +192,25 @@ RTD_HOST_DEVICE RTD_INLINE float acosSqrtFactor(float a) {
 }
 
 // q(a) with acos(a)^2 = (1 - a) q(a), fitted where a filter's narrow normal term needs it:
-// a degree-3 near-minimax fit on [0.6, 1] (relative error 1.5e-6, as acos(a): 7.5e-7 relative).
+// a degree-3 near-minimax fit on [0.6, 1] (relative error 1.5e-6; (1 - a) q(a) evaluated in
+// float: 1.6e-6, as acos(a): 8e-7).
 // Below 0.6 it keeps growing as a falls (to 3.3 at -1), so (1 - a) q(a) >= acos(0.6)^2 = 0.86
 // there, where a narrow normal term's weight is e^-30 or less anyway (OppositeNormalsVanish,
 // edge_stopping.h). Two multiply-adds fewer per tap than a fit on all of [0, 1] of equal
-// accuracy (scripts/fit_polynomials.py fits both this and exp2Negative's polynomial).
+// accuracy (scripts/fit_polynomials.py fits it).
 RTD_HOST_DEVICE RTD_INLINE float acosSquaredFactorNearOne(float a) {
     return polynomial(a, 2.45852923f, -6.22350633e-1f, 2.02668637e-1f, -3.88501473e-2f);
 }
+
+// L(a) with -log2(a) = (1 - a) L(a), fitted where a weight max(0, a)^sigma with a large sigma
+// needs it: a degree-4 near-minimax fit on [0.8, 1] (relative error 2.2e-7; (1 - a) L(a)
+// evaluated in float: 4.8e-7). Below 0.8 it keeps growing as a falls (to 14.7 at -1), so
+// (1 - a) L(a) >= -log2(0.8) = 0.3219 there (kNegLog2NearOneFloor); scripts/fit_polynomials.py
+// fits it.
+RTD_HOST_DEVICE RTD_INLINE float negLog2FactorNearOne(float a) {
+    return polynomial(a, 3.42985296f, -4.48950958f, 4.19275141f, -2.14431977f, 4.53920215e-1f);
+}
+constexpr float kNegLog2NearOneFloor = 0.3219f;
 
 // arccos on [-1, 1] (input clamped): acos(|x|) = sqrt(1 - |x|) p(|x|), reflected for x < 0.
 RTD_HOST_DEVICE RTD_INLINE float acosFast(float x) {

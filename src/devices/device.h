@@ -18,8 +18,9 @@ class Device {
     // True if kernels can read and write host memory directly (no staging copies needed).
     virtual bool sharesHostMemory() const = 0;
     // True where log2 is one instruction (a GPU's special-function unit): SVGF's normal factor
-    // max(0, n.n')^128 is then cheaper as exp2(128 log2(n.n')) inside the weight's exponent than
-    // as 7 squarings. On the CPU log2 is a polynomial and the squarings win.
+    // max(0, n.n')^128 is then cheapest as exp2(128 log2(n.n')) inside the weight's exponent. On
+    // the CPU log2 is a polynomial, and one fitted near n.n' = 1 for sigma_n = 128 wins
+    // (svgfWeight).
     virtual bool hasFastLogarithm() const { return false; }
     // True where SVGF keeps normal and depth interleaved, one 16-byte load per tap (a GPU),
     // rather than in planes that load as contiguous vectors (a CPU). Such a device also has a

@@ -70,8 +70,8 @@ struct LaunchTraits<Atrous<NarrowNormal, Modulated>> : DefaultLaunch {
 };
 // SVGF's with the guide interleaved: 128 at stride 1, 102 from stride 2 (102 against 128 at
 // strides 1-16: 0.094, 0.097, 0.100, 0.098, 0.108 -> 0.100, 0.094, 0.100, 0.099, 0.099 ms).
-template <int NormalSquarings, bool Modulated, bool Interleaved>
-struct LaunchTraits<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> : DefaultLaunch {
+template <int FixedSigmaNormal, bool Modulated, bool Interleaved>
+struct LaunchTraits<SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved>> : DefaultLaunch {
     static constexpr int kMinBlocks = 5;
     static constexpr int kFixedStridesUpTo = 16;
     static constexpr int fixedStrideMinBlocks(int stride) {
@@ -79,8 +79,8 @@ struct LaunchTraits<SvgfAtrous<NormalSquarings, Modulated, Interleaved>> : Defau
     }
 };
 // The planar variance (the interleaved one keeps the default, see above).
-template <int NormalSquarings>
-struct LaunchTraits<SvgfVariance<NormalSquarings, false>> : DefaultLaunch {
+template <int FixedSigmaNormal>
+struct LaunchTraits<SvgfVariance<FixedSigmaNormal, false>> : DefaultLaunch {
     static constexpr int kMinBlocks = 5;
 };
 template <class Kernel, int Stride>
