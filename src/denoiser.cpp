@@ -31,7 +31,7 @@ Mat4 toMat4(const Matrix4& m) {
 EdgeStoppingTerms edgeTerms(const EdgeStoppingSettings& s) {
     return {1.0f / (2.0f * s.sigmaColor * s.sigmaColor),
             1.0f / (2.0f * s.sigmaNormal * s.sigmaNormal),
-            1.0f / (2.0f * s.sigmaPlane * s.sigmaPlane), s.separateObjects ? 1 : 0};
+            1.0f / (2.0f * s.sigmaPlane * s.sigmaPlane)};
 }
 
 void checkImage(const Image& image, int width, int height, int channels, const char* what) {
@@ -103,6 +103,8 @@ struct Denoiser::Impl {
     DeviceBuffer<float> noisy, despeckled, position, albedo, filtered, scratch, reprojected;
     DeviceBuffer<float> normal[2], depth[2], history[2];
     DeviceBuffer<std::int32_t> objectId[2];
+    // The filters' tap keys where objects are not kept apart (else the object IDs serve).
+    DeviceBuffer<std::int32_t> filterKeys;
     DeviceBuffer<float> derivatives;  // 3 planes: dz/dx, dz/dy, fwidth(n)
     DeviceBuffer<float> windowSums;   // 7 planes: separable window statistics
     DeviceBuffer<std::uint8_t> inputFlags, validity;
@@ -150,7 +152,8 @@ struct Denoiser::Impl {
                 planes(position),
                 depth[current].data(),
                 objectId[current].data(),
-                {normalDepth[current].data()}};
+                {normalDepth[current].data()},
+                settings.edges.separateObjects ? objectId[current].data() : filterKeys.data()};
     }
     PreviousGeometry previousGeometry() const {
         return {objectId[previous()].data(),
@@ -261,10 +264,13 @@ struct Denoiser::Impl {
         if (settings.method == Method::Temporal || settings.method == Method::Svgf)
             derivatives = planesBuffer(3);
         windowSums = planesBuffer(7);
-        for (auto& ids : objectId) {  // ID -1 everywhere: the border reads as background
-            ids = DeviceBuffer<std::int32_t>(d, padded);
+        auto idPlane = [&] {  // -1 everywhere: the border reads as background
+            DeviceBuffer<std::int32_t> ids(d, padded);
             d.fill(ids.data(), 0xff, ids.bytes());
-        }
+            return ids;
+        };
+        for (auto& ids : objectId) ids = idPlane();
+        if (!settings.edges.separateObjects) filterKeys = idPlane();
         inputFlags = DeviceBuffer<std::uint8_t>(d, n);
         validity = DeviceBuffer<std::uint8_t>(d, padded);
         d.fill(validity.data(), kReprojectionNoHistory, validity.bytes());
@@ -435,8 +441,7 @@ struct Denoiser::Impl {
 
     void addSvgfPasses(DeviceBuffer<float>* in, const std::string& inName) {
         const SvgfSettings& sv = settings.svgf;
-        SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance,
-                        settings.edges.separateObjects ? 1 : 0};
+        SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance};
         padding = std::max({padding, kSvgfWindowRadius, 2 << (sv.iterations - 1)});
         addGeometryPass();
         if (sv.historyClampK > 0.0f) {
@@ -538,6 +543,10 @@ struct Denoiser::Impl {
         std::vector<std::string> ingested = {"noisy",    "albedo", "normal",
                                              "position", "depth",  "objectId"};
         addPass("ingest", {"frame"}, ingested, [this] { ingest(); });
+        if (!settings.edges.separateObjects)
+            addPass("filter-keys", {"objectId"}, {"filterKeys"}, [this] {
+                launch(FilterKeysKernel{layout, objectId[current].data(), filterKeys.data()});
+            });
         DeviceBuffer<float>* in = &noisy;
         std::string inName = "noisy";
         if (settings.outlier.enabled) {

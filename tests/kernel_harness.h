@@ -89,7 +89,7 @@ struct Harness {
                        h);
     }
     GBufferView gbuffer() const {
-        return {layout, planes(normal), planes(position), depth.data(), ids.data()};
+        return {layout, planes(normal), planes(position), depth.data(), ids.data(), {}, ids.data()};
     }
     // Every pixel of `p` from `next`: values in [offset, offset + 1).
     void fillRandom(const Planes3& p, UnitRandom& next, float offset = 0.0f) const {

@@ -109,6 +109,39 @@ TEST(Denoiser, WithoutObjectSeparationTheIdEdgeIsBlurred) {
     EXPECT_GT(out.at(15, 10, 2), 0.3f);
 }
 
+// Without object separation the filters' tap keys (GBufferView::filterKey) are 0 on every
+// object and -1 on background: the two objects mix, the background beside them still does not.
+TEST(Denoiser, WithoutObjectSeparationObjectsMixButBackgroundStaysOut) {
+    SceneDescription d;
+    d.objectCount = 2;
+    d.id = [](int x, int) { return x < 8 ? -1 : x < 16 ? 0 : 1; };
+    d.colour = [](int x, int) {
+        return x < 8    ? std::array<float, 3>{50.0f, 50.0f, 50.0f}
+               : x < 16 ? std::array<float, 3>{1.0f, 0.2f, 0.2f}
+                        : std::array<float, 3>{0.2f, 0.2f, 1.0f};
+    };
+    Frame frame = makeFrame(d);
+    // The background's geometry as the objects' (one plane): only its ID can keep it out.
+    SceneDescription plane = d;
+    plane.id = [](int, int) { return 0; };
+    Frame geometry = makeFrame(plane);
+    frame.normal = geometry.normal;
+    frame.position = geometry.position;
+    frame.depth = geometry.depth;
+    for (Method method : kAllMethods) {
+        DenoiserSettings s = settingsFor(method);
+        s.edges.sigmaColor = 100.0f;
+        s.edges.separateObjects = false;
+        Denoiser denoiser(s);
+        Image out = denoiser.processFrame(frame);
+        for (int y = 0; y < d.height; ++y) {
+            EXPECT_GT(out.at(15, y, 2), 0.3f) << toString(method);  // object 1 mixed in
+            for (int c = 0; c < 3; ++c)  // no background (50) in object 0
+                EXPECT_LT(out.at(8, y, c), 1.01f) << toString(method);
+        }
+    }
+}
+
 TEST(Denoiser, BackgroundPassesThrough) {
     SceneDescription d;
     d.id = [](int x, int) { return x < 8 ? -1 : 0; };

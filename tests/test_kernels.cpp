@@ -55,7 +55,7 @@ TEST(FastMath, NarrowNormalTermMatchesAcosSquaredNearOneAndStaysLargeBelow) {
     EXPECT_EQ(normalAngleSquared<true>(1.0001f), 0.0f);  // normals a little longer than 1
     const float atBoundary = normalAngleSquared<true>(0.6f);
     EXPECT_GE(atBoundary, 0.8598f);  // acos(0.6)^2 = 0.85988
-    EdgeStoppingTerms widestNarrow{1.0f, 88.0f / 2.4674011f, 1.0f, 1};
+    EdgeStoppingTerms widestNarrow{1.0f, 88.0f / 2.4674011f, 1.0f};
     ASSERT_TRUE(oppositeNormalsVanish(widestNarrow));
     EXPECT_LT(std::exp(-widestNarrow.normalScale * atBoundary), 1e-13);
     float previous = atBoundary;
@@ -97,7 +97,7 @@ TEST(FastMath, MatrixInverseRoundTrips) {
 
 EdgeStoppingTerms wideOpenTerms() {
     // Colour sigma so large that the colour term vanishes: weights are the B3 taps alone.
-    return {1e-12f, 1.0f / (2.0f * 0.1f * 0.1f), 1.0f / (2.0f * 0.1f * 0.1f), 1};
+    return {1e-12f, 1.0f / (2.0f * 0.1f * 0.1f), 1.0f / (2.0f * 0.1f * 0.1f)};
 }
 
 TEST(Atrous, TapsLieAtMultiplesOfTheStrideWithB3Weights) {
@@ -130,7 +130,7 @@ TEST(Atrous, ConstantImageIsUnchangedAtTheBorderToo) {
     Harness h(20, 12, 8);
     h.setAll(h.a, make3(0.3f, 0.6f, 0.9f));
     h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 4,
-                                  EdgeStoppingTerms{1.39f, 50.0f, 50.0f, 1}},
+                                  EdgeStoppingTerms{1.39f, 50.0f, 50.0f}},
                      20, 12);
     for (int y = 0; y < 12; ++y)
         for (int x = 0; x < 20; ++x) {
@@ -155,7 +155,7 @@ TEST(Atrous, ModulatedLevelWritesTheResultTimesTheAlbedoInterleavedInsteadOfItsP
     h.ids.data()[h.layout.index(6, 3)] = -1;
     const Float3 untouched = make3(-7.0f, -7.0f, -7.0f);
     h.setAll(h.c, untouched);
-    const EdgeStoppingTerms terms{1.39f, 50.0f, 50.0f, 1};
+    const EdgeStoppingTerms terms{1.39f, 50.0f, 50.0f};
     h.device->launch(AtrousNarrowNormalKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 2, terms},
                      w, hgt);
     h.device->launch(AtrousNarrowNormalModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.c), 2,
@@ -172,7 +172,7 @@ TEST(Atrous, SquareRootFreeNormalTermGivesTheSameResultWhereOppositeNormalsVanis
     // sigma_normal 0.1 (the assignment's): normals in every direction, including opposite ones,
     // and a noisy colour; the square-root-free kernel equals the general one.
     EdgeStoppingTerms terms{1.0f / (2.0f * 0.6f * 0.6f), 1.0f / (2.0f * 0.1f * 0.1f),
-                            1.0f / (2.0f * 0.1f * 0.1f), 1};
+                            1.0f / (2.0f * 0.1f * 0.1f)};
     ASSERT_TRUE(oppositeNormalsVanish(terms));
     EdgeStoppingTerms wide = terms;
     wide.normalScale = 1.0f / (2.0f * 0.5f * 0.5f);

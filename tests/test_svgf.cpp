@@ -12,7 +12,7 @@ namespace rtd {
 namespace {
 
 SvgfTerms paperTerms() {
-    return {1.0f, 128.0f, 4.0f, 1};
+    return {1.0f, 128.0f, 4.0f};
 }
 
 TEST(SvgfKernels, VarianceIsPropagatedWithSquaredWeights) {
@@ -337,7 +337,7 @@ TEST(SvgfKernels, InterleavedGuideGivesThePlanarKernelsResults) {
         interleaved.store(i, hs.planes(hs.normal).load(i), hs.depth.data()[i]);
     GBufferView planar = hs.gbuffer(), packed = hs.gbuffer();
     packed.normalDepth = interleaved;
-    const SvgfTerms terms{1.0f, 100.0f, 4.0f, 1};  // sigma_n != 128: the log2 form on both
+    const SvgfTerms terms{1.0f, 100.0f, 4.0f};  // sigma_n != 128: the log2 form on both
     auto expectSamePlanes = [&](const DeviceBuffer<float>& a, const DeviceBuffer<float>& b,
                                 int planes, const char* what) {
         for (int k = 0; k < planes; ++k)

@@ -42,8 +42,8 @@ struct Atrous {
         const EdgeStoppingTerms terms = base2(edges);
         EdgeStoppingCentre centre = edgeStoppingCentre(terms, ci, ni, g.position.load(i));
         std::int32_t idI = g.objectId[i];
-        // Taps from the centre's object, or any object (a background centre's result is unused).
-        AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
+        // Taps whose filter key is the centre's (views.h; a background centre's result is unused).
+        const std::int32_t keyI = g.filterKey[i];
         // The centre: all distances 0 but the normal's (n.n rounds to 1 - a few ulp), weight
         // 2^log2k exp(-D_normal^2 / 2sn^2).
         float centreW = exp2Negative(2.0f * kLog2B3[2] -
@@ -69,8 +69,8 @@ struct Atrous {
             pairExponents(a, b, exponentA, exponentB);
             float wa = exp2Negative(-exponentA);
             float wb = exp2Negative(-exponentB);
-            wa = accepted.contains(g.objectId[ja]) ? wa : 0.0f;
-            wb = accepted.contains(g.objectId[jb]) ? wb : 0.0f;
+            wa = g.filterKey[ja] == keyI ? wa : 0.0f;
+            wb = g.filterKey[jb] == keyI ? wb : 0.0f;
             sum += ca * wa + cb * wb;
             sumW += wa + wb;
         }

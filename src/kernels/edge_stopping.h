@@ -10,10 +10,9 @@ namespace rtd {
 
 // 1 / (2 sigma^2) for each term, precomputed on the host.
 struct EdgeStoppingTerms {
-    float colorScale;     // 1 / (2 sigma_color^2)
-    float normalScale;    // 1 / (2 sigma_normal^2)
-    float planeScale;     // 1 / (2 sigma_plane^2)
-    int separateObjects;  // 1: taps on another object ID get weight 0
+    float colorScale;   // 1 / (2 sigma_color^2)
+    float normalScale;  // 1 / (2 sigma_normal^2)
+    float planeScale;   // 1 / (2 sigma_plane^2)
 };
 
 // True when normals far apart weigh nothing at float precision: (pi/2)^2 / 2sn^2 >= 88

@@ -1,7 +1,7 @@
 // Brute-force joint bilateral filter (assignment formula):
 //   J(i,j) = exp(-|i-j|^2/2sp^2 - |C_i-C_j|^2/2sc^2 - D_normal^2/2sn^2 - D_plane^2/2sd^2)
 // over a (2r+1)^2 window; background pixels pass through and never contribute; with
-// separateObjects (default) neither do pixels of another object.
+// separateObjects (default) neither do pixels of another object (GBufferView::filterKey).
 #pragma once
 
 #include "kernels/edge_stopping.h"
@@ -30,8 +30,7 @@ struct Jbf {
         const float coordScale2 = coordScale * kLog2e;
         EdgeStoppingCentre centre =
             edgeStoppingCentre(terms, ci, g.normal.load(i), g.position.load(i));
-        std::int32_t idI = g.objectId[i];
-        AcceptedIds accepted = acceptedIds(edges.separateObjects, idI);
+        const std::int32_t keyI = g.filterKey[i];  // taps with the same key (views.h)
         float sumR = 0.0f, sumG = 0.0f, sumB = 0.0f, sumW = 0.0f;
         for (int dy = -radius; dy <= radius; ++dy) {
             PixelIndex row = i + L.offset(0, dy);
@@ -45,7 +44,7 @@ struct Jbf {
                     terms, centre, cj, g.normal.load(j), g.position.load(j),
                     -(float(dx * dx) + dy2) * coordScale2);
                 float w = exp2Negative(-exponent);  // then selected: no branch around it
-                w = accepted.contains(g.objectId[j]) ? w : 0.0f;
+                w = g.filterKey[j] == keyI ? w : 0.0f;
                 sumR += w * cj.x;
                 sumG += w * cj.y;
                 sumB += w * cj.z;

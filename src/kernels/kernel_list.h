@@ -7,6 +7,7 @@
 
 #include "kernels/accumulate.h"
 #include "kernels/atrous.h"
+#include "kernels/filter_keys.h"
 #include "kernels/ingest.h"
 #include "kernels/jbf.h"
 #include "kernels/modulate.h"
@@ -32,6 +33,7 @@ inline constexpr bool
 #define RTD_FOR_EACH_KERNEL(X)              \
     X(IngestKernel)                         \
     X(IngestInterleavedKernel)              \
+    X(FilterKeysKernel)                     \
     X(LuminanceRowSumsKernel)               \
     X(LuminanceRowSumsWideKernel)           \
     X(ColorRowSumsKernel)                   \

@@ -23,7 +23,6 @@ struct SvgfTerms {
     float sigmaDepth;      // sigma_z: depth tolerance relative to the local depth slope
     float sigmaNormal;     // sigma_n: exponent of max(0, n.n')
     float sigmaLuminance;  // sigma_l: luminance tolerance in standard deviations
-    int separateObjects;   // pixels of another object never contribute
 };
 
 // What the SVGF weight needs of the centre pixel, shared by all its taps.
@@ -317,9 +316,8 @@ struct SvgfVariance {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 c = illumination.load(i);
-        std::int32_t id = g.objectId[i];
         float h = length[i];
-        AcceptedIds accepted = acceptedIds(terms.separateObjects, id);
+        const std::int32_t keyI = g.filterKey[i];  // taps with the same key (views.h)
         float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
         // No variance yet: phi_l = sigma_l.
         Float3 normalI;
@@ -346,7 +344,7 @@ struct SvgfVariance {
                 loadNormalDepth<InterleavedGuide>(g, j, nj, zj);
                 float w =
                     svgfWeight<FixedSigmaNormal>(terms, centre, depthScale, zj, nj, luminance(cj));
-                w = accepted.contains(g.objectId[j]) ? w : 0.0f;
+                w = g.filterKey[j] == keyI ? w : 0.0f;
                 float shifted = moments.at(0, j) - centreMean;
                 sum += cj * w;
                 m1 += shifted * w;
@@ -425,7 +423,7 @@ struct SvgfAtrous {
                 return;
             }
         }
-        AcceptedIds accepted = acceptedIds(terms.separateObjects, id);
+        const std::int32_t keyI = g.filterKey[i];  // taps with the same key (views.h)
         float prefiltered = 0.0f, prefilterW = 0.0f;
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
@@ -467,7 +465,7 @@ struct SvgfAtrous {
                 loadNormalDepth<InterleavedGuide>(g, j, nj, zj);
                 float w = svgfWeight<FixedSigmaNormal>(terms, c, depthScale, zj, nj, luminance(cj),
                                                        log2Kernel);
-                w = accepted.contains(g.objectId[j]) ? w : 0.0f;
+                w = g.filterKey[j] == keyI ? w : 0.0f;
                 sum += cj * w;
                 sumVar += w * w * in.at(3, j);
                 sumW += w;

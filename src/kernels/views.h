@@ -103,6 +103,10 @@ struct GBufferView {
     const float* depth = nullptr;
     const std::int32_t* objectId = nullptr;  // -1: background and border
     NormalDepth4 normalDepth = {};  // null unless the device interleaves the guide (device.h)
+    // The edge-aware filters' tap test: a tap mixes in where its key equals the centre's, one
+    // comparison per tap. The object ID where objects are kept apart (the default: this is
+    // objectId); otherwise 0 on every object and -1 on background (FilterKeys).
+    const std::int32_t* filterKey = nullptr;
 };
 
 // Normal and depth at a tap: from the interleaved copy (Interleaved) or the planes.
@@ -137,20 +141,6 @@ RTD_HOST_DEVICE RTD_INLINE void loadPair(const T* p, T& first, T& second) {
     std::memcpy(&first, &low, sizeof first);
     std::memcpy(&second, &high, sizeof second);
 #endif
-}
-
-// The object IDs a centre pixel takes taps from, as one range [first, last]: its own ID when
-// objects are kept apart, else any object (ID >= 0). Two comparisons per tap and no branch on the
-// setting inside a filter's tap loop (with one, the CPU's unrolled 5x5 loops split into blocks and
-// spilled more: the SVGF A-Trous ran 8-11 % slower).
-struct AcceptedIds {
-    std::int32_t first, last;
-    RTD_HOST_DEVICE RTD_INLINE bool contains(std::int32_t id) const {
-        return (id >= first) & (id <= last);
-    }
-};
-RTD_HOST_DEVICE RTD_INLINE AcceptedIds acceptedIds(int separateObjects, std::int32_t centreId) {
-    return separateObjects ? AcceptedIds{centreId, centreId} : AcceptedIds{0, 0x7fffffff};
 }
 
 // 1 for a pixel that holds an object, 0 for background or border (a multiplier, not a branch).
