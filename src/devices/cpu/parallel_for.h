@@ -144,8 +144,17 @@ void parallelRows(int width, int height, const Kernel& kernel, RowOf rowOf) {
         // reference, any int or byte store (object IDs, validity codes) might overwrite them, so
         // the compiler reloaded them per pixel and wrote the planes with scatters.
         const Kernel local = kernel;
+        // A-Trous levels: each core takes one contiguous block of the visited rows, whose tap
+        // rows it then reuses from its own L2 (box temporal's levels 4 % faster than with
+        // 4-row chunks dealt out in turn, 1080p unchanged). The other kernels keep the dynamic
+        // chunks: the ingest, streaming its input, ran 30 % slower in static blocks.
+        if constexpr (kHasTapRowStride<Kernel>) {
+#pragma omp for schedule(static)
+            for (int k = 0; k < height; ++k) runRow(local, 0, width, rowOf(k));
+        } else {
 #pragma omp for schedule(dynamic, 4)
-        for (int k = 0; k < height; ++k) runRow(local, 0, width, rowOf(k));
+            for (int k = 0; k < height; ++k) runRow(local, 0, width, rowOf(k));
+        }
     }
 }
 
