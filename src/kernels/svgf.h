@@ -45,11 +45,12 @@ RTD_HOST_DEVICE RTD_INLINE float svgfDepthScale(const SvgfTerms& t, float depthA
 // evaluated as 2^(log2 k - |dz| depthScale - |dl| luminanceScale) with both scales precomputed
 // (k costs no multiplication there).
 // FixedSigmaNormal < 0: any sigma_n, the normal factor folded into the exponent as
-// sigma_n log2(n.n') (the GPU's form: log2 is one instruction there). FixedSigmaNormal = s > 0:
-// sigma_n = s known at compile time, and -log2(n.n') = (1 - n.n') L(n.n') with L a polynomial
-// fitted near n.n' = 1 (negLog2FactorNearOne): five multiply-adds in the exponent instead of a
-// logarithm, or of seven squarings after exp2 for the paper's 128 (the CPU's form: its
-// iterations ran 5 % faster than with the squarings, which were ~25 % faster than the log2).
+// sigma_n log2(n.n') (the GPU's form: log2 is one instruction there). FixedSigmaNormal = s > 0
+// (the CPU's form for the paper's 128): sigma_n = s known at compile time, and -log2(n.n') =
+// (1 - n.n') L(n.n') with L a polynomial fitted near n.n' = 1 (negLog2FactorNearOne): seven
+// operations in the exponent where the CPU's log2 polynomial costs more, and where seven
+// squarings, a saturate and a multiplication after exp2 cost ten (its iterations ran 5 % faster
+// than with those squarings, which were ~25 % faster than the log2).
 template <int FixedSigmaNormal>
 RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre& c,
                                             float depthScale, float depthJ, Float3 normalJ,
