@@ -442,6 +442,8 @@ struct Denoiser::Impl {
     void addSvgfPasses(DeviceBuffer<float>* in, const std::string& inName) {
         const SvgfSettings& sv = settings.svgf;
         SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance};
+        // The kernels with sigma_n = 128 fixed (svgfWeight), where log2 is not one instruction.
+        const bool sigma128 = hasPaperSigmaNormal(terms) && !device->hasFastLogarithm();
         padding = std::max({padding, kSvgfWindowRadius, 2 << (sv.iterations - 1)});
         addGeometryPass();
         if (sv.historyClampK > 0.0f) {
@@ -481,7 +483,7 @@ struct Denoiser::Impl {
         addPass(
             "svgf-variance",
             {"illumination", "moments", "historyLength", "derivatives", "illumination+variance"},
-            {"illumination+variance"}, [this, terms] {
+            {"illumination+variance"}, [this, terms, sigma128] {
                 // The moments pass uses Falcor's wider luminance tolerance: no variance yet.
                 SvgfTerms wide = terms;
                 wide.sigmaLuminance = 10.0f;
@@ -493,7 +495,7 @@ struct Denoiser::Impl {
                 };
                 if (interleavedGuide)
                     run.template operator()<SvgfVarianceInterleavedKernel>();
-                else if (hasPaperSigmaNormal(wide) && !device->hasFastLogarithm())
+                else if (sigma128)
                     run.template operator()<SvgfVarianceNormal128Kernel>();
                 else
                     run.template operator()<SvgfVarianceKernel>();
@@ -514,13 +516,12 @@ struct Denoiser::Impl {
             addPass(fmt::format("svgf-atrous{}", it),
                     withModulation(modulated, {slotName(src), "normal", "depth", "derivatives"}),
                     {modulated ? std::string("output") : slotName(dst)},
-                    [this, terms, stride, src, dst, modulated] {
+                    [this, terms, stride, src, dst, modulated, sigma128] {
                         auto run = [&]<class Kernel>() {
                             launch(Kernel{gbuffer(), planeSet(derivatives), planeSet(slot(src)),
                                           planeSet(slot(dst)), stride, terms, planes(albedo),
                                           outputTarget});
                         };
-                        bool sigma128 = hasPaperSigmaNormal(terms) && !device->hasFastLogarithm();
                         if (interleavedGuide)
                             modulated
                                 ? run.template operator()<SvgfAtrousInterleavedModulatedKernel>()

@@ -62,17 +62,9 @@ RTD_HOST_DEVICE RTD_INLINE int mini(int a, int b) {
 RTD_HOST_DEVICE RTD_INLINE int maxi(int a, int b) {
     return a > b ? a : b;
 }
-// x clamped to [0, 1] (NaN to 0): on the GPU the saturation modifier of the instruction that
-// produced x (no instruction of its own).
-RTD_HOST_DEVICE RTD_INLINE float saturate(float x) {
-#if defined(__CUDA_ARCH__)
-    return __saturatef(x);
-#else
-    return clampf(x, 0.0f, 1.0f);
-#endif
-}
-// min(x, 1) for callers to which a negative x read as 0 gives the same answer: on the GPU the
-// saturation modifier (free), on the CPU one instruction rather than saturate's two.
+// min(x, 1) for callers to which a negative x read as 0 gives the same answer: on the GPU x
+// clamped to [0, 1] by the saturation modifier of the instruction that produced x (free), on
+// the CPU one instruction rather than a clamp's two.
 RTD_HOST_DEVICE RTD_INLINE float atMostOneOrSaturated(float x) {
 #if defined(__CUDA_ARCH__)
     return __saturatef(x);

@@ -25,7 +25,9 @@ class Device {
     // True where SVGF keeps normal and depth interleaved, one 16-byte load per tap (a GPU),
     // rather than in planes that load as contiguous vectors (a CPU). Such a device also has a
     // fast logarithm (the interleaved kernels use the log2 form) and prefers fused passes (the
-    // temporal stage reads the interleaved copies in its one-pass form only).
+    // temporal stage reads the interleaved copies in its one-pass form only), and it runs a
+    // pixel per thread: the interleaved SVGF iteration and variance skip background (inactive)
+    // pixels by a branch, where the CPU's forms compute every lane and select.
     virtual bool interleavesGuide() const { return false; }
     // True where passes the CPU keeps apart run better as one (a GPU): there a pass's
     // intermediate planes cost a round trip through memory, and a rare branch (SVGF's 3x3

@@ -49,7 +49,7 @@ RTD_HOST_DEVICE RTD_INLINE float svgfDepthScale(const SvgfTerms& t, float depthA
 // (the CPU's form for the paper's 128): sigma_n = s known at compile time, and -log2(n.n') =
 // (1 - n.n') L(n.n') with L a polynomial fitted near n.n' = 1 (negLog2FactorNearOne): seven
 // operations in the exponent where the CPU's log2 polynomial costs more, and where seven
-// squarings, a saturate and a multiplication after exp2 cost ten (its iterations ran 5 % faster
+// squarings, a clamp and a multiplication after exp2 cost ten (its iterations ran 5 % faster
 // than with those squarings, which were ~25 % faster than the log2).
 template <int FixedSigmaNormal>
 RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre& c,
@@ -416,7 +416,7 @@ struct SvgfAtrous {
         // Background passes through. The GPU's form (InterleavedGuide) skips its work by a
         // branch: a warp of background pixels then runs no taps. The CPU's, vectorised across
         // pixels, computes every lane and selects at the end: there a branch would mask every
-        // load and blend of the taps (the iterations ran 9 % slower on box).
+        // load and blend of the taps (the iterations ran 10 % slower so on box).
         const bool foreground = id >= 0;
         if constexpr (InterleavedGuide) {
             if (!foreground) {
