@@ -206,6 +206,72 @@ TEST(Atrous, SquareRootFreeNormalTermGivesTheSameResultWhereOppositeNormalsVanis
     }
 }
 
+// The GPU's pairs of pixels a stride apart (Atrous::filterPair, as the CUDA launcher maps them:
+// tops of 2-stride row blocks, a top whose partner is outside the image filtered alone) give
+// filter's result up to rounding (other pairs share the divisions). Random normals, positions,
+// colours, two objects and background (a pair with both, one with neither object pixel).
+TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
+    const int w = 21, hgt = 17;
+    Harness h(w, hgt, 8);
+    UnitRandom next{13u};
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = h.layout.index(x, y);
+            h.planes(h.normal).store(
+                i, normalize(make3(0.4f * (next() - 0.5f), 0.4f * (next() - 0.5f), -1.0f)));
+            h.planes(h.position).store(i, make3(float(x), float(y), 5.0f + next()));
+            h.planes(h.a).store(i, make3(next(), next(), next()));
+            h.ids.data()[i] = (x + 2 * y) % 9 == 0 ? 1 : 0;
+        }
+    h.ids.data()[h.layout.index(4, 2)] = -1;  // its pair at stride 2: (4, 0), an object pixel
+    h.ids.data()[h.layout.index(7, 8)] = h.ids.data()[h.layout.index(7, 9)] = -1;  // stride 1
+    const EdgeStoppingTerms terms{1.0f / (2.0f * 0.6f * 0.6f), 1.0f / (2.0f * 0.1f * 0.1f),
+                                  1.0f / (2.0f * 0.1f * 0.1f)};
+    auto runPairs = [&]<int Stride>(const auto& kernel) {
+        for (int top = 0; top < hgt; top += (top % (2 * Stride) == Stride - 1) ? Stride + 1 : 1)
+            for (int x = 0; x < w; ++x) {
+                if (top + Stride < hgt)
+                    kernel.template filterPair<Stride>(x, top);
+                else
+                    kernel.template filter<Stride>(x, top);
+            }
+    };
+    auto expectNear = [&](Float3 single, Float3 paired, int x, int y, int stride) {
+        EXPECT_NEAR(paired.x, single.x, 1e-5f * std::fabs(single.x) + 1e-7f)
+            << x << ", " << y << " stride " << stride;
+        EXPECT_NEAR(paired.y, single.y, 1e-5f * std::fabs(single.y) + 1e-7f)
+            << x << ", " << y << " stride " << stride;
+        EXPECT_NEAR(paired.z, single.z, 1e-5f * std::fabs(single.z) + 1e-7f)
+            << x << ", " << y << " stride " << stride;
+    };
+    for (int stride : {1, 2, 4}) {
+        AtrousNarrowNormalKernel single{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms};
+        AtrousNarrowNormalKernel paired{h.gbuffer(), h.planes(h.a), h.planes(h.c), stride, terms};
+        h.device->launch(single, w, hgt);
+        stride == 1   ? runPairs.template operator()<1>(paired)
+        : stride == 2 ? runPairs.template operator()<2>(paired)
+                      : runPairs.template operator()<4>(paired);
+        for (int y = 0; y < hgt; ++y)
+            for (int x = 0; x < w; ++x)
+                expectNear(h.planes(h.b).load(h.layout.index(x, y)),
+                           h.planes(h.c).load(h.layout.index(x, y)), x, y, stride);
+        // Filtered (not passed through): the result differs from the input.
+        EXPECT_NE(h.planes(h.c).load(h.layout.index(10, 6)).x,
+                  h.planes(h.a).load(h.layout.index(10, 6)).x);
+    }
+    // The modulated last level (the general normal term).
+    DeviceBuffer<float> albedo = h.buffer(3);
+    h.fillRandom(h.planes(albedo), next, 0.5f);
+    std::vector<float> rgbSingle(3 * w * hgt), rgbPaired(3 * w * hgt, -1.0f);
+    h.device->launch(AtrousModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 2, terms,
+                                           h.planes(albedo), rgbSingle.data()},
+                     w, hgt);
+    runPairs.template operator()<2>(AtrousModulatedKernel{
+        h.gbuffer(), h.planes(h.a), h.planes(h.b), 2, terms, h.planes(albedo), rgbPaired.data()});
+    for (std::size_t k = 0; k < rgbSingle.size(); ++k)
+        ASSERT_NEAR(rgbPaired[k], rgbSingle[k], 1e-5f * std::fabs(rgbSingle[k]) + 1e-7f) << k;
+}
+
 TEST(Accumulate, ClampsHistoryToMeanPlusMinusKSigmaThenBlends) {
     // 3x3 image, radius 1: the centre's neighbourhood is the whole image. The window is read
     // at its compile-time width (masked taps), so the border is that wide.

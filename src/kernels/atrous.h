@@ -83,6 +83,97 @@ struct Atrous {
         else
             out.store(i, result);
     }
+
+    // Two pixels of a column a stride apart, (x, y) and (x, y + Stride), y + Stride inside the
+    // image (the GPU's form): their 5x5 taps share 20 places, so the pair loads 30 taps where two
+    // pixels alone load 50. Every tap is evaluated in a couple that shares one division
+    // (pairExponents): a shared tap for both centres; A's row -2 with B's row +2; the two
+    // centres, each a tap of the other. Each pixel gets filter's result up to rounding.
+    template <int Stride>
+    RTD_HOST_DEVICE RTD_INLINE void filterPair(int x, int y) const {
+        constexpr float kLog2B3[5] = {-4.0f, -2.0f, -1.4150375f, -2.0f, -4.0f};
+        auto log2Kernel = [&](int dx, int dy) { return kLog2B3[dy + 2] + kLog2B3[dx + 2]; };
+        const Layout& L = g.layout;
+        const PixelIndex iA = L.index(x, y), iB = iA + L.offset(0, Stride);
+        const std::int32_t idA = g.objectId[iA], idB = g.objectId[iB];
+        const EdgeStoppingTerms terms = base2(edges);
+        Tap centreA = tap(iA), centreB = tap(iB);
+        if (idA < 0 && idB < 0) {  // background passes through; a warp of it runs no taps
+            finish(x, y, iA, centreA.color, {}, 1.0f, idA);
+            finish(x, y + Stride, iB, centreB.color, {}, 1.0f, idB);
+            return;
+        }
+        Sums a = centreSums(terms, centreA), b = centreSums(terms, centreB);
+        // A's row -2 with B's row +2 (rows -2 and 3 of A's).
+        RTD_UNROLL
+        for (int dx = -2; dx <= 2; ++dx)
+            addCouple(terms, a, tap(iA + L.offset(dx * Stride, -2 * Stride)), log2Kernel(dx, -2), b,
+                      tap(iA + L.offset(dx * Stride, 3 * Stride)), log2Kernel(dx, 2));
+        // Rows -1..2 of A's (-2..1 of B's), but for the centres.
+        RTD_UNROLL
+        for (int row = -1; row <= 2; ++row) RTD_UNROLL
+        for (int dx = -2; dx <= 2; ++dx) {
+            if (dx == 0 && (row == 0 || row == 1)) continue;
+            Tap t = tap(iA + L.offset(dx * Stride, row * Stride));
+            addCouple(terms, a, t, log2Kernel(dx, row), b, t, log2Kernel(dx, row - 1));
+        }
+        addCouple(terms, a, centreB, log2Kernel(0, 1), b, centreA, log2Kernel(0, -1));
+        finish(x, y, iA, centreA.color, a.sum, a.sumW, idA);
+        finish(x, y + Stride, iB, centreB.color, b.sum, b.sumW, idB);
+    }
+
+  private:
+    // filterPair's pieces.
+    struct Tap {
+        Float3 color, normal, position;
+        std::int32_t key;
+    };
+    RTD_HOST_DEVICE RTD_INLINE Tap tap(PixelIndex j) const {
+        return {in.load(j), g.normal.load(j), g.position.load(j), g.filterKey[j]};
+    }
+    struct Sums {
+        EdgeStoppingCentre centre;
+        std::int32_t key;
+        Float3 sum;
+        float sumW;
+    };
+    // The centre tap alone (as in filter).
+    RTD_HOST_DEVICE RTD_INLINE Sums centreSums(const EdgeStoppingTerms& terms, const Tap& c) const {
+        constexpr float kLog2Centre = 2.0f * -1.4150375f;  // log2 (3/8)^2
+        float w = exp2Negative(kLog2Centre -
+                               normalAngleSquared<OppositeNormalsVanish>(dot(c.normal, c.normal)) *
+                                   terms.normalScale);
+        return {edgeStoppingCentre(terms, c.color, c.normal, c.position), c.key, c.color * w, w};
+    }
+    // Tap ta for centre a and tap tb for centre b, with one division between them.
+    RTD_HOST_DEVICE RTD_INLINE void addCouple(const EdgeStoppingTerms& terms, Sums& a,
+                                              const Tap& ta, float log2KernelA, Sums& b,
+                                              const Tap& tb, float log2KernelB) const {
+        EdgeStoppingParts pa = edgeStoppingParts<OppositeNormalsVanish>(
+            terms, a.centre, ta.color, ta.normal, ta.position, log2KernelA);
+        EdgeStoppingParts pb = edgeStoppingParts<OppositeNormalsVanish>(
+            terms, b.centre, tb.color, tb.normal, tb.position, log2KernelB);
+        float exponentA, exponentB;
+        pairExponents(pa, pb, exponentA, exponentB);
+        float wa = exp2Negative(-exponentA), wb = exp2Negative(-exponentB);
+        wa = ta.key == a.key ? wa : 0.0f;
+        wb = tb.key == b.key ? wb : 0.0f;
+        a.sum += ta.color * wa;
+        a.sumW += wa;
+        b.sum += tb.color * wb;
+        b.sumW += wb;
+    }
+    // As filter ends: background passes through.
+    RTD_HOST_DEVICE RTD_INLINE void finish(int x, int y, PixelIndex i, Float3 ci, Float3 sum,
+                                           float sumW, std::int32_t id) const {
+        float keep = 1.0f - foregroundMask(id);
+        float scale = (1.0f - keep) / maxf(sumW, 1e-20f);
+        Float3 result = sum * scale + ci * keep;
+        if constexpr (Modulated)
+            storeModulated(g.layout, rgbOut, x, y, result * albedo.load(i));
+        else
+            out.store(i, result);
+    }
 };
 using AtrousKernel = Atrous<false>;  // any sigma_normal
 // sigma_normal <= 0.118 (the assignment's 0.1): no square root per tap (edge_stopping.h).

@@ -401,13 +401,90 @@ struct SvgfAtrous {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { filter<0>(x, y); }
 
+    // The B3 spline's centre value squared, (3/8)^2: the centre tap's weight is 1 (no depth,
+    // luminance or normal difference) times that.
+    static constexpr float kCentre = 0.375f * 0.375f;
+    // The tap before the centre in raster order of the +/- pair at (dx, dy) tap steps: the one
+    // the pair's depth scale is written for.
+    RTD_HOST_DEVICE static constexpr bool isBeforeCentre(int dx, int dy) {
+        return dy < 0 || (dy == 0 && dx < 0);
+    }
+
+    // One centre pixel's weighting terms and its sums over the taps so far.
+    struct Centre {
+        SvgfCentre weight;
+        float stepX, stepY;  // the depth change over one tap step
+        std::int32_t key;    // taps with the same key mix in (views.h)
+        Float3 sum;
+        float sumVar, sumW;
+    };
+    // The centre's terms, its sums holding the centre tap. step: the stride.
+    RTD_HOST_DEVICE RTD_INLINE Centre centre(PixelIndex i, Float3 cI, float varianceI,
+                                             int step) const {
+        constexpr float kGauss[2] = {0.25f, 0.125f};  // 3x3: 1/4 centre, 1/8 edges, 1/16 corners
+        const Layout& L = g.layout;
+        float prefiltered = 0.0f, prefilterW = 0.0f;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                PixelIndex j = i + L.offset(dx, dy);
+                float k = (dx == 0 && dy == 0)   ? kGauss[0]
+                          : (dx == 0 || dy == 0) ? kGauss[1]
+                                                 : 0.0625f;
+                float m = g.objectId[j] >= 0 ? k : 0.0f;
+                prefiltered += m * in.at(3, j);
+                prefilterW += m;
+            }
+        Float3 normalI;
+        float depthI;
+        loadNormalDepth<InterleavedGuide>(g, i, normalI, depthI);
+        SvgfCentre w{
+            depthI, normalI, luminance(cI),
+            kLog2e /
+                (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f)};
+        return {w,
+                derivatives.at(0, i) * float(step),
+                derivatives.at(1, i) * float(step),
+                g.filterKey[i],
+                cI * kCentre,
+                kCentre * kCentre * varianceI,
+                kCentre};
+    }
+    // The depth term's scale for the taps at (ax, ay) and (-ax, -ay) tap steps away (one
+    // division serves both; svgfDepthScale).
+    RTD_HOST_DEVICE RTD_INLINE float depthScale(const Centre& c, int ax, int ay) const {
+        return svgfDepthScale(terms, c.stepX * float(ax) + c.stepY * float(ay));
+    }
+    // Adds the tap at (ax, ay) tap steps (colour cj, its variance, guide, key) to the centre's
+    // sums.
+    RTD_HOST_DEVICE RTD_INLINE void addTap(Centre& c, int ax, int ay, float scale, Float3 cj,
+                                           float varianceJ, Float3 nj, float zj,
+                                           std::int32_t keyJ) const {
+        // log2 of the B3 spline's 3/8, 1/4, 1/16 by |tap offset| (in the exponent).
+        constexpr float kLog2B3[3] = {-1.4150375f, -2.0f, -4.0f};
+        float log2Kernel = kLog2B3[ax < 0 ? -ax : ax] + kLog2B3[ay < 0 ? -ay : ay];
+        float w =
+            svgfWeight<FixedSigmaNormal>(terms, c.weight, scale, zj, nj, luminance(cj), log2Kernel);
+        w = keyJ == c.key ? w : 0.0f;
+        c.sum += cj * w;
+        c.sumVar += w * w * varianceJ;
+        c.sumW += w;
+    }
+    // Writes the filtered colour and variance, or the input where the centre is background.
+    RTD_HOST_DEVICE RTD_INLINE void finish(int x, int y, PixelIndex i, const Centre& c,
+                                           bool foreground, Float3 cI, float varianceI) const {
+        float inv = 1.0f / c.sumW;  // >= (3/8)^2, the centre's
+        Float3 filtered = c.sum * inv;
+        // Per component (a selected vector would stop the CPU vectorising the kernel).
+        store(x, y, i,
+              make3(foreground ? filtered.x : cI.x, foreground ? filtered.y : cI.y,
+                    foreground ? filtered.z : cI.z),
+              foreground ? c.sumVar * inv * inv : varianceI);
+    }
+
     // FixedStride > 0: the stride as a compile-time constant (as in Atrous::filter).
     template <int FixedStride>
     RTD_HOST_DEVICE RTD_INLINE void filter(int x, int y) const {
         const int step = FixedStride > 0 ? FixedStride : stride;
-        constexpr float kB3[3] = {0.375f, 0.25f, 0.0625f};         // by |tap offset| / stride
-        constexpr float kLog2B3[3] = {-1.4150375f, -2.0f, -4.0f};  // log2 kB3: in the exponent
-        constexpr float kGauss[2] = {0.25f, 0.125f};  // 3x3: 1/4 centre, 1/8 edges, 1/16 corners
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         std::int32_t id = g.objectId[i];
@@ -424,61 +501,74 @@ struct SvgfAtrous {
                 return;
             }
         }
-        const std::int32_t keyI = g.filterKey[i];  // taps with the same key (views.h)
-        float prefiltered = 0.0f, prefilterW = 0.0f;
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                PixelIndex j = i + L.offset(dx, dy);
-                float k = (dx == 0 && dy == 0)   ? kGauss[0]
-                          : (dx == 0 || dy == 0) ? kGauss[1]
-                                                 : 0.0625f;
-                float m = g.objectId[j] >= 0 ? k : 0.0f;
-                prefiltered += m * in.at(3, j);
-                prefilterW += m;
-            }
-        Float3 normalI;
-        float depthI;
-        loadNormalDepth<InterleavedGuide>(g, i, normalI, depthI);
-        SvgfCentre c{
-            depthI, normalI, luminance(cI),
-            kLog2e /
-                (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f)};
-        // The depth change over one tap step.
-        float stepX = derivatives.at(0, i) * float(step);
-        float stepY = derivatives.at(1, i) * float(step);
-        // The centre: weight 1 (no depth, luminance or normal difference) times its kernel value.
-        constexpr float kCentre = kB3[0] * kB3[0];
-        Float3 sum = cI * kCentre;
-        float sumVar = kCentre * kCentre * varianceI, sumW = kCentre;
+        Centre c = centre(i, cI, varianceI, step);
         // The other 24 taps as 12 pairs at +offset and -offset, which share their kernel value
         // and their depth scale (one division per pair).
         RTD_UNROLL
         for (int pair = 0; pair < 12; ++pair) {
             int ax = pair % 5 - 2, ay = pair / 5 - 2;  // the taps before the centre, raster order
-            float log2Kernel = kLog2B3[ax < 0 ? -ax : ax] + kLog2B3[ay < 0 ? -ay : ay];
-            float depthScale = svgfDepthScale(terms, stepX * float(ax) + stepY * float(ay));
+            float scale = depthScale(c, ax, ay);
             PixelIndex o = L.offset(ax * step, ay * step);
             RTD_UNROLL
             for (int side = 0; side < 2; ++side) {
                 PixelIndex j = side == 0 ? i + o : i - o;
-                Float3 cj = in.rgb().load(j), nj;
+                Float3 nj;
                 float zj;
                 loadNormalDepth<InterleavedGuide>(g, j, nj, zj);
-                float w = svgfWeight<FixedSigmaNormal>(terms, c, depthScale, zj, nj, luminance(cj),
-                                                       log2Kernel);
-                w = g.filterKey[j] == keyI ? w : 0.0f;
-                sum += cj * w;
-                sumVar += w * w * in.at(3, j);
-                sumW += w;
+                addTap(c, side == 0 ? ax : -ax, side == 0 ? ay : -ay, scale, in.rgb().load(j),
+                       in.at(3, j), nj, zj, g.filterKey[j]);
             }
         }
-        float inv = 1.0f / sumW;  // >= (3/8)^2, the centre's
-        Float3 filtered = sum * inv;
-        // Per component (a selected vector would stop the CPU vectorising the kernel).
-        store(x, y, i,
-              make3(foreground ? filtered.x : cI.x, foreground ? filtered.y : cI.y,
-                    foreground ? filtered.z : cI.z),
-              foreground ? sumVar * inv * inv : varianceI);
+        finish(x, y, i, c, foreground, cI, varianceI);
+    }
+
+    // Two pixels of a column a stride apart, (x, y) and (x, y + stride) (the GPU's form,
+    // InterleavedGuide; y + stride inside the image): their 5x5 taps share 20 places, so the
+    // pair loads 30 taps where two pixels alone load 50. Each pixel gets filter's result up to
+    // the order of its sums.
+    template <int Stride>
+    RTD_HOST_DEVICE RTD_INLINE void filterPair(int x, int y) const {
+        static_assert(InterleavedGuide && Stride > 0, "the GPU's form, at a fixed stride");
+        const Layout& L = g.layout;
+        const PixelIndex iA = L.index(x, y), iB = iA + L.offset(0, Stride);
+        const bool foregroundA = g.objectId[iA] >= 0, foregroundB = g.objectId[iB] >= 0;
+        Float3 cA = in.rgb().load(iA), cB = in.rgb().load(iB);
+        float varianceA = in.at(3, iA), varianceB = in.at(3, iB);
+        if (!foregroundA && !foregroundB) {  // background passes through (as in filter)
+            store(x, y, iA, cA, varianceA);
+            store(x, y + Stride, iB, cB, varianceB);
+            return;
+        }
+        Centre a = centre(iA, cA, varianceA, Stride), b = centre(iB, cB, varianceB, Stride);
+        // Tap rows -2..3 of A's: A's rows -2..2 are B's -3..1. The depth scales are written for
+        // the tap before the centre of each +/- pair, so that each is computed once per centre.
+        RTD_UNROLL
+        for (int row = -2; row <= 3; ++row) {
+            RTD_UNROLL
+            for (int ax = -2; ax <= 2; ++ax) {
+                const bool forA = row <= 2 && !(row == 0 && ax == 0);
+                const bool forB = row >= -1 && !(row == 1 && ax == 0);
+                PixelIndex j = iA + L.offset(ax * Stride, row * Stride);
+                Float3 cj = in.rgb().load(j), nj;
+                float zj;
+                loadNormalDepth<true>(g, j, nj, zj);
+                const float varianceJ = in.at(3, j);
+                const std::int32_t keyJ = g.filterKey[j];
+                if (forA) {
+                    const bool first = isBeforeCentre(ax, row);
+                    addTap(a, ax, row, depthScale(a, first ? ax : -ax, first ? row : -row), cj,
+                           varianceJ, nj, zj, keyJ);
+                }
+                if (forB) {
+                    const int by = row - 1;
+                    const bool first = isBeforeCentre(ax, by);
+                    addTap(b, ax, by, depthScale(b, first ? ax : -ax, first ? by : -by), cj,
+                           varianceJ, nj, zj, keyJ);
+                }
+            }
+        }
+        finish(x, y, iA, a, foregroundA, cA, varianceA);
+        finish(x, y + Stride, iB, b, foregroundB, cB, varianceB);
     }
 };
 using SvgfAtrousKernel = SvgfAtrous<-1>;  // any sigma_n

@@ -49,17 +49,49 @@ struct FixedStride {
     }
 };
 
+// A fixed-stride iteration run as pixel pairs a stride apart in a column
+// (Kernel::filterPair<Stride>), for kernels whose LaunchTraits say kPairsRows: two pixels share
+// 20 of their 25 taps, so a pair loads 30 where two threads load 50, and a thread has two
+// independent chains of arithmetic to interleave. Thread row r handles rows top(r) and
+// top(r) + Stride, top(r) = 2 Stride floor(r / Stride) + r mod Stride (each row once); a top row
+// whose partner lies outside the image is filtered alone. Measured on the H100 at 1080p (bench
+// --size 1920x1080 --frames 200, 2-3 alternating runs, medians), iterations at strides 1-16:
+// - the course's, 168 registers: 0.138, 0.147, 0.152, 0.149, 0.169 (modulated) -> 0.101,
+//   0.102, 0.105, 0.103, 0.133 ms; `atrous` 0.920 -> 0.708 ms, `temporal` 1.120 -> 0.902
+//   (128 registers: 0.715 and 0.913; 255: 0.830 and 1.012);
+// - SVGF's, 128 registers: 0.093, 0.097, 0.103, 0.100, 0.095 (modulated) -> 0.084, 0.088,
+//   0.093, 0.090, 0.095 ms; `svgf` 0.925 -> 0.887 ms (102 registers: 0.912; 85: 0.953; 170:
+//   0.910; with the CPU's polynomial for the normal factor instead of log2: 0.940).
+template <class Kernel, int Stride>
+struct PairedRows {
+    Kernel kernel;
+    int height;
+    static constexpr int threadRows(int height) {
+        return (height + 2 * Stride - 1) / (2 * Stride) * Stride;
+    }
+    __device__ __forceinline__ void operator()(int x, int r) const {
+        int top = r / Stride * (2 * Stride) + r % Stride;
+        if (top + Stride < height)
+            kernel.template filterPair<Stride>(x, top);
+        else if (top < height)
+            kernel.template filter<Stride>(x, top);
+    }
+};
+
 // How each kernel is launched, one entry per kernel family: kMinBlocks, its register budget (the
 // minimum of resident blocks per SM, above; 3 allows 170 registers); kFixedStridesUpTo, the
-// strides up to which it runs as FixedStride<Kernel, s>; fixedStrideMinBlocks(s), their budget
-// (where there are such strides).
+// strides up to which it runs as FixedStride<Kernel, s>, or as PairedRows<Kernel, s> where
+// kPairsRows; fixedStrideMinBlocks(s) and pairMinBlocks(s), their budgets (where there are such
+// strides).
 struct DefaultLaunch {
     static constexpr int kMinBlocks = 6;
     static constexpr int kFixedStridesUpTo = 0;
+    static constexpr bool kPairsRows = false;  // fixed strides run as PairedRows
 };
 template <class Kernel>
 struct LaunchTraits : DefaultLaunch {};
-// The course's: 128 at stride 1, 170 from stride 2 (128 against 170 at strides 1-16: 0.152,
+// The course's: in pairs at 168 registers (PairedRows, above). Alone (before the pairs), 128 at
+// stride 1 and 170 from stride 2 had been the best (128 against 170 at strides 1-16: 0.152,
 // 0.152, 0.158, 0.155, 0.155 -> 0.143, 0.151, 0.160, 0.158, 0.159 ms; modulated at 16: 0.173 ->
 // 0.186).
 template <bool NarrowNormal, bool Modulated>
@@ -67,8 +99,11 @@ struct LaunchTraits<Atrous<NarrowNormal, Modulated>> : DefaultLaunch {
     static constexpr int kMinBlocks = 4;
     static constexpr int kFixedStridesUpTo = 16;
     static constexpr int fixedStrideMinBlocks(int stride) { return stride == 1 ? 4 : 3; }
+    static constexpr bool kPairsRows = true;
+    static constexpr int pairMinBlocks(int) { return 3; }
 };
-// SVGF's with the guide interleaved: 128 at stride 1, 102 from stride 2 (102 against 128 at
+// SVGF's with the guide interleaved: in pairs at 128 registers (PairedRows, above). Alone
+// (before the pairs), 128 at stride 1 and 102 from stride 2 had been the best (102 against 128 at
 // strides 1-16: 0.094, 0.097, 0.100, 0.098, 0.108 -> 0.100, 0.094, 0.100, 0.099, 0.099 ms).
 template <int FixedSigmaNormal, bool Modulated, bool Interleaved>
 struct LaunchTraits<SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved>> : DefaultLaunch {
@@ -77,6 +112,8 @@ struct LaunchTraits<SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved>> : Defa
     static constexpr int fixedStrideMinBlocks(int stride) {
         return Interleaved && stride > 1 ? 5 : 4;
     }
+    static constexpr bool kPairsRows = Interleaved;  // filterPair is the interleaved form's
+    static constexpr int pairMinBlocks(int) { return 4; }
 };
 // The planar variance (the interleaved one keeps the default, see above).
 template <int FixedSigmaNormal>
@@ -86,6 +123,10 @@ struct LaunchTraits<SvgfVariance<FixedSigmaNormal, false>> : DefaultLaunch {
 template <class Kernel, int Stride>
 struct LaunchTraits<FixedStride<Kernel, Stride>> : DefaultLaunch {
     static constexpr int kMinBlocks = LaunchTraits<Kernel>::fixedStrideMinBlocks(Stride);
+};
+template <class Kernel, int Stride>
+struct LaunchTraits<PairedRows<Kernel, Stride>> : DefaultLaunch {
+    static constexpr int kMinBlocks = LaunchTraits<Kernel>::pairMinBlocks(Stride);
 };
 
 template <class Kernel>
@@ -248,11 +289,17 @@ class CudaDevice final : public Device {
     template <class Kernel, int Stride = 1>
     void launchOn(const Kernel& kernel, dim3 grid, dim3 block, int width, int height) {
         if constexpr (Stride <= LaunchTraits<Kernel>::kFixedStridesUpTo) {
-            if (kernel.tapRowStride() == Stride)
+            if (kernel.tapRowStride() != Stride) {
+                launchOn<Kernel, 2 * Stride>(kernel, grid, block, width, height);
+            } else if constexpr (LaunchTraits<Kernel>::kPairsRows) {
+                using Paired = PairedRows<Kernel, Stride>;
+                int rows = Paired::threadRows(height);
+                dim3 pairGrid(grid.x, (rows + block.y - 1) / block.y);
+                runKernel2D<<<pairGrid, block, 0, stream_>>>(Paired{kernel, height}, width, rows);
+            } else {
                 runKernel2D<<<grid, block, 0, stream_>>>(FixedStride<Kernel, Stride>{kernel}, width,
                                                          height);
-            else
-                launchOn<Kernel, 2 * Stride>(kernel, grid, block, width, height);
+            }
         } else {
             runKernel2D<<<grid, block, 0, stream_>>>(kernel, width, height);
         }
