@@ -59,9 +59,11 @@ struct FixedStride {
 // - the course's, 168 registers: 0.138, 0.147, 0.152, 0.149, 0.169 (modulated) -> 0.101,
 //   0.102, 0.105, 0.103, 0.133 ms; `atrous` 0.920 -> 0.708 ms, `temporal` 1.120 -> 0.902
 //   (128 registers: 0.715 and 0.913; 255: 0.830 and 1.012);
-// - SVGF's, 128 registers: 0.093, 0.097, 0.103, 0.100, 0.095 (modulated) -> 0.084, 0.088,
-//   0.093, 0.090, 0.095 ms; `svgf` 0.925 -> 0.887 ms (102 registers: 0.912; 85: 0.953; 170:
-//   0.910; with the CPU's polynomial for the normal factor instead of log2: 0.940).
+// - SVGF's, 128 registers: 0.093, 0.097, 0.103, 0.100, 0.095 (modulated) -> 0.082, 0.082,
+//   0.084, 0.083, 0.095 ms; `svgf` 0.925 -> 0.863 ms (0.887 with the depth scales kept per
+//   centre rather than shared by couples, SvgfAtrous::filterPair; with those, 102 registers:
+//   0.912, 85: 0.953, 170: 0.910, and the CPU's polynomial for the normal factor instead of
+//   log2: 0.940).
 template <class Kernel, int Stride>
 struct PairedRows {
     Kernel kernel;
