@@ -259,8 +259,11 @@ struct Denoiser::Impl {
         if (settings.method != Method::Svgf) filtered = planesBuffer(3);
         if (settings.outlier.enabled) despeckled = planesBuffer(3);
         if (atrousLevels) scratch = planesBuffer(3);
-        if (assignmentTemporal)
-            for (auto* b : {&reprojected, &history[0], &history[1]}) *b = planesBuffer(3);
+        if (assignmentTemporal) {
+            for (auto* b : {&history[0], &history[1]}) *b = planesBuffer(3);
+            // The fused pass keeps the reprojected history in registers.
+            if (!d.prefersFusedPasses()) reprojected = planesBuffer(3);
+        }
         if (settings.method == Method::Temporal || settings.method == Method::Svgf)
             derivatives = planesBuffer(3);
         windowSums = planesBuffer(7);
@@ -385,6 +388,50 @@ struct Denoiser::Impl {
     // The assignment's pipeline after the spatial filter.
     void addTemporalPasses() {
         addGeometryPass();
+        float alpha = settings.temporal.alpha, k = settings.temporal.clampK;
+        int radius = settings.temporal.clampRadius;
+        padding = std::max(padding, windowReach(radius));
+        addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
+            launchWindowed<ColorRowSums>(radius, gbuffer(), planes(filtered), sums(), radius);
+        });
+        if (device->prefersFusedPasses()) {
+            // One pass, the history in registers (ReprojectAccumulate).
+            addPass("reproject-accumulate",
+                    {"position", "normal", "depth", "objectId", "derivatives", "previous geometry",
+                     "history", "matrices", "filtered", "windowSums", "albedo"},
+                    {"history", "validity", "output"}, [this, alpha, k, radius] {
+                        ReprojectKernel reproject{gbuffer(),
+                                                  previousGeometry(),
+                                                  objects.data(),
+                                                  objectCount,
+                                                  planeSet(derivatives),
+                                                  historyTest(),
+                                                  planes(history[previous()]),
+                                                  {},
+                                                  validity.data(),
+                                                  hasHistory ? 1 : 0};
+                        auto accumulate = [&]<int R>() {
+                            return AccumulateModulated<R>{gbuffer(),
+                                                          sums(),
+                                                          planes(filtered),
+                                                          {},
+                                                          nullptr,
+                                                          planes(history[current]),
+                                                          alpha,
+                                                          k,
+                                                          radius,
+                                                          planes(albedo),
+                                                          outputTarget};
+                        };
+                        if (radius <= kNarrowWindow)
+                            launch(ReprojectAccumulateKernel{
+                                reproject, accumulate.template operator()<kNarrowWindow>()});
+                        else
+                            launch(ReprojectAccumulateWideKernel{
+                                reproject, accumulate.template operator()<kWideWindow>()});
+                    });
+            return;
+        }
         addPass("reproject",
                 {"position", "normal", "depth", "objectId", "derivatives", "previous geometry",
                  "history", "matrices"},
@@ -394,12 +441,6 @@ struct Denoiser::Impl {
                                            planes(history[previous()]), planes(reprojected),
                                            validity.data(), hasHistory ? 1 : 0});
                 });
-        float alpha = settings.temporal.alpha, k = settings.temporal.clampK;
-        int radius = settings.temporal.clampRadius;
-        padding = std::max(padding, windowReach(radius));
-        addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
-            launchWindowed<ColorRowSums>(radius, gbuffer(), planes(filtered), sums(), radius);
-        });
         // Modulates too: the result goes out from registers, not read back by a modulate pass.
         addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity", "albedo"},
                 {"history", "output"}, [this, alpha, k, radius] {

@@ -424,13 +424,13 @@ TEST(Denoiser, PassesAreListedWithTheirBuffers) {
     Denoiser temporal(settingsFor(Method::Temporal));
     std::vector<std::string> names;
     for (const PassInfo& p : temporal.passes()) names.push_back(p.name);
-    std::vector<std::string> expected{"ingest",   "outlier-rows", "outlier",    "atrous0",
-                                      "atrous1",  "atrous2",      "atrous3",    "atrous4",
-                                      "geometry", "reproject",    "clamp-rows", "accumulate"};
+    std::vector<std::string> expected{"ingest",   "outlier-rows", "outlier",   "atrous0",
+                                      "atrous1",  "atrous2",      "atrous3",   "atrous4",
+                                      "geometry", "clamp-rows",   "reproject", "accumulate"};
     EXPECT_EQ(names, expected);
     // The accumulation writes the history and, modulated, the output.
     EXPECT_EQ(temporal.passes()[11].outputs, (std::vector<std::string>{"history", "output"}));
-    EXPECT_EQ(temporal.passes()[9].outputs, (std::vector<std::string>{"reprojected", "validity"}));
+    EXPECT_EQ(temporal.passes()[10].outputs, (std::vector<std::string>{"reprojected", "validity"}));
 }
 
 }  // namespace

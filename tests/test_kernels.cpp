@@ -506,6 +506,86 @@ TEST(Reproject, RunsOfOneObjectGiveThePerPixelResult) {
     EXPECT_GT(moved, 0);  // object 1 was sampled elsewhere: its matrices were used
 }
 
+// The GPU's one-pass temporal stage (ReprojectAccumulate: the history in registers) gives what
+// the reprojection and the modulated accumulation give as two passes, with two objects moving
+// differently (valid, off-screen and other-object history) and background.
+TEST(Reproject, OnePassWithTheAccumulationGivesTheTwoPassResult) {
+    const int w = 24, hgt = 10;
+    Harness h(w, hgt, 4);
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x)
+            h.ids.data()[h.layout.index(x, y)] = x == 3 && y == 4 ? -1 : x < 11 ? 0 : 1;
+    UnitRandom next{17u};
+    DeviceBuffer<float> history = h.buffer(3), derivatives = h.buffer(3), albedo = h.buffer(3),
+                        reprojected = h.buffer(3), twoPass = h.buffer(3), onePass = h.buffer(3);
+    h.fillRandom(h.planes(history), next);
+    h.fillRandom(h.planes(h.a), next);  // this frame, filtered
+    h.fillRandom(h.planes(albedo), next, 0.5f);
+    // The wall pixel (x, y) is world (x, y, 5); object 0 is static, object 1 moved 2.6 pixels
+    // right and 0.7 up since the previous frame (its left edge then samples object 0).
+    ObjectReprojection objects[2] = {};
+    for (int k = 0; k < 2; ++k) {
+        float dx = k ? 2.6f : 0.0f, dy = k ? -0.7f : 0.0f;
+        objects[k].currentWorldToPreviousScreen =
+            Mat4{{{5, 0, 0, 2.5f - 5 * dx}, {0, 5, 0, 2.5f - 5 * dy}, {0, 0, 1, 0}, {0, 0, 1, 0}}};
+        objects[k].currentWorldToPreviousWorld =
+            Mat4{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
+        objects[k].valid = 1;
+    }
+    PreviousGeometry previous{h.ids.data(), h.depth.data(), h.planes(h.normal)};
+    std::vector<std::uint8_t> codes(std::size_t(h.layout.planeSize), 0);
+    std::vector<float> rgbTwo(3 * w * hgt), rgbOne(3 * w * hgt, -1.0f);
+    auto reproject = [&](Planes3 out, std::uint8_t* validity) {
+        return ReprojectKernel{h.gbuffer(),
+                               previous,
+                               objects,
+                               2,
+                               h.planeSet(derivatives),
+                               HistoryTest{0, 10.0f, 16.0f},
+                               h.planes(history),
+                               out,
+                               validity,
+                               1};
+    };
+    auto accumulate = [&](Planes3 out, float* rgb) {
+        return AccumulateModulatedKernel{h.gbuffer(),
+                                         h.sumPlanes(),
+                                         h.planes(h.a),
+                                         h.planes(reprojected),
+                                         h.validity.data(),
+                                         out,
+                                         0.2f,
+                                         1.0f,
+                                         2,
+                                         h.planes(albedo),
+                                         rgb};
+    };
+    h.device->launch(ColorRowSumsKernel{h.gbuffer(), h.planes(h.a), h.sumPlanes(), 2}, w, hgt);
+    h.device->launch(reproject(h.planes(reprojected), h.validity.data()), w, hgt);
+    h.device->launch(accumulate(h.planes(twoPass), rgbTwo.data()), w, hgt);
+    const ReprojectAccumulateKernel fused{reproject({}, codes.data()),
+                                          accumulate(h.planes(onePass), rgbOne.data())};
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x) fused(x, y);
+    int valid = 0, invalid = 0;
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = h.layout.index(x, y);
+            ASSERT_EQ(codes[std::size_t(i)], h.validity.data()[i]) << x << ", " << y;
+            Float3 a = h.planes(twoPass).load(i), b = h.planes(onePass).load(i);
+            // Vectorised against scalar: FMA contraction may differ in the last bits.
+            EXPECT_NEAR(b.x, a.x, 1e-6f * std::fabs(a.x) + 1e-7f) << x << ", " << y;
+            EXPECT_NEAR(b.y, a.y, 1e-6f * std::fabs(a.y) + 1e-7f) << x << ", " << y;
+            EXPECT_NEAR(b.z, a.z, 1e-6f * std::fabs(a.z) + 1e-7f) << x << ", " << y;
+            valid += codes[std::size_t(i)] == kReprojectionValid;
+            invalid += codes[std::size_t(i)] != kReprojectionValid;
+        }
+    for (std::size_t k = 0; k < rgbTwo.size(); ++k)
+        ASSERT_NEAR(rgbOne[k], rgbTwo[k], 1e-6f * std::fabs(rgbTwo[k]) + 1e-7f) << k;
+    EXPECT_GT(valid, 0);    // histories blended in
+    EXPECT_GT(invalid, 0);  // and refused (off screen, other object, background)
+}
+
 // Records how each pixel was run: 1 with its known key, 2 without.
 struct RecordKeyedRuns {
     int width;

@@ -27,14 +27,19 @@ struct Accumulate {
     float* rgbOut = nullptr;  // Modulated only: interleaved, 3 floats per pixel
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        PixelIndex i = g.layout.index(x, y);
+        blend(x, y, i, reprojected.load(i), validity[i] == kReprojectionValid);
+    }
+    // The blend with pixel i's reprojected history given (ReprojectAccumulate: in registers).
+    RTD_HOST_DEVICE RTD_INLINE void blend(int x, int y, PixelIndex i, Float3 reprojectedHistory,
+                                          bool valid) const {
         const Layout& L = g.layout;
-        PixelIndex i = L.index(x, y);
         Float3 c = current.load(i);
         // Branch-free (the CPU vectorises it): invalid history gets weight 0 (a = 1).
-        float a = validity[i] == kReprojectionValid ? alpha : 1.0f;
+        float a = valid ? alpha : 1.0f;
         ColorWindowStats w = colorWindowStats<MaxRadius>(rowSums, i, L.pitch, radius);
         Float3 history =
-            clamp3(reprojected.load(i), w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
+            clamp3(reprojectedHistory, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
         Float3 result = c * a + history * (1.0f - a);
         out.store(i, result);
         if constexpr (Modulated) storeModulated(L, rgbOut, x, y, result * albedo.load(i));
@@ -46,5 +51,25 @@ template <int MaxRadius>
 using AccumulateModulated = Accumulate<MaxRadius, true>;
 using AccumulateModulatedKernel = AccumulateModulated<kNarrowWindow>;
 using AccumulateModulatedWideKernel = AccumulateModulated<kWideWindow>;
+
+// The reprojection and the (modulated) accumulation as one pass, for a device that
+// prefersFusedPasses (a GPU): the history stays in registers instead of going through the
+// reprojected planes and back (as SvgfTemporal does for SVGF). Its `reproject.reprojected` and
+// `accumulate.reprojected`/`validity` inputs are unused.
+template <int MaxRadius>
+struct ReprojectAccumulate {
+    ReprojectKernel reproject;
+    AccumulateModulated<MaxRadius> accumulate;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        PixelIndex i = reproject.g.layout.index(x, y);
+        std::uint8_t code;
+        Float3 history = reproject.sample<false>(i, 0, code);
+        reproject.validity[i] = code;
+        accumulate.blend(x, y, i, history, code == kReprojectionValid);
+    }
+};
+using ReprojectAccumulateKernel = ReprojectAccumulate<kNarrowWindow>;
+using ReprojectAccumulateWideKernel = ReprojectAccumulate<kWideWindow>;
 
 }  // namespace rtd

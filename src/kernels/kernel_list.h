@@ -53,6 +53,8 @@ inline constexpr bool
     X(AccumulateWideKernel)                 \
     X(AccumulateModulatedKernel)            \
     X(AccumulateModulatedWideKernel)        \
+    X(ReprojectAccumulateKernel)            \
+    X(ReprojectAccumulateWideKernel)        \
     X(SvgfReprojectKernel)                  \
     X(SvgfReprojectSearchKernel)            \
     X(SvgfAccumulateKernel)                 \

@@ -255,6 +255,14 @@ struct ReprojectKernel {
     template <bool KnownId>
     RTD_HOST_DEVICE RTD_INLINE void pixel(int x, int y, std::int32_t id) const {
         PixelIndex i = g.layout.index(x, y);
+        std::uint8_t code;
+        reprojected.store(i, sample<KnownId>(i, id, code));
+        validity[i] = code;
+    }
+    // Pixel i's history colour (0 where invalid) and why (`code`, a ReprojectionCode).
+    template <bool KnownId>
+    RTD_HOST_DEVICE RTD_INLINE Float3 sample(PixelIndex i, std::int32_t id,
+                                             std::uint8_t& code) const {
         auto taps = findHistory<false, KnownId>(g, i, previous, objects, objectCount, derivatives,
                                                 test, hasHistory, id);
         constexpr int kTaps = decltype(taps)::kCount;
@@ -263,8 +271,8 @@ struct ReprojectKernel {
         Float3 sum;  // 0 where invalid: every weight is 0
         RTD_UNROLL
         for (int t = 0; t < kTaps; ++t) sum += make3(r[t], gr[t], b[t]) * taps.weight[t];
-        reprojected.store(i, sum);
-        validity[i] = taps.code;
+        code = taps.code;
+        return sum;
     }
 };
 
