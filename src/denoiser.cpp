@@ -264,7 +264,9 @@ struct Denoiser::Impl {
             // The fused pass keeps the reprojected history in registers.
             if (!d.prefersFusedPasses()) reprojected = planesBuffer(3);
         }
-        if (settings.method == Method::Temporal || settings.method == Method::Svgf)
+        // The temporal method's fused pass (a GPU's) computes its slopes where it needs them.
+        if (settings.method == Method::Svgf ||
+            (settings.method == Method::Temporal && !d.prefersFusedPasses()))
             derivatives = planesBuffer(3);
         windowSums = planesBuffer(7);
         auto idPlane = [&] {  // -1 everywhere: the border reads as background
@@ -387,18 +389,22 @@ struct Denoiser::Impl {
 
     // The assignment's pipeline after the spatial filter.
     void addTemporalPasses() {
-        addGeometryPass();
+        const bool fused = device->prefersFusedPasses();
+        if (fused)
+            padding = std::max(padding, 2);  // the fused pass's slopes and 2x2 taps (geometry's)
+        else
+            addGeometryPass();
         float alpha = settings.temporal.alpha, k = settings.temporal.clampK;
         int radius = settings.temporal.clampRadius;
         padding = std::max(padding, windowReach(radius));
         addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
             launchWindowed<ColorRowSums>(radius, gbuffer(), planes(filtered), sums(), radius);
         });
-        if (device->prefersFusedPasses()) {
-            // One pass, the history in registers (ReprojectAccumulate).
+        if (fused) {
+            // One pass, the history in registers and the slopes computed (ReprojectAccumulate).
             addPass("reproject-accumulate",
-                    {"position", "normal", "depth", "objectId", "derivatives", "previous geometry",
-                     "history", "matrices", "filtered", "windowSums", "albedo"},
+                    {"position", "normal", "depth", "objectId", "previous geometry", "history",
+                     "matrices", "filtered", "windowSums", "albedo"},
                     {"history", "validity", "output"}, [this, alpha, k, radius] {
                         ReprojectKernel reproject{gbuffer(),
                                                   previousGeometry(),

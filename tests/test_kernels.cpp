@@ -506,9 +506,10 @@ TEST(Reproject, RunsOfOneObjectGiveThePerPixelResult) {
     EXPECT_GT(moved, 0);  // object 1 was sampled elsewhere: its matrices were used
 }
 
-// The GPU's one-pass temporal stage (ReprojectAccumulate: the history in registers) gives what
-// the reprojection and the modulated accumulation give as two passes, with two objects moving
-// differently (valid, off-screen and other-object history) and background.
+// The GPU's one-pass temporal stage (ReprojectAccumulate: the history in registers, the slopes
+// computed) gives what the geometry pass, the reprojection and the modulated accumulation give
+// as three passes, with two objects moving differently (valid, off-screen and other-object
+// history), varying depth slopes and normals, and background.
 TEST(Reproject, OnePassWithTheAccumulationGivesTheTwoPassResult) {
     const int w = 24, hgt = 10;
     Harness h(w, hgt, 4);
@@ -521,6 +522,14 @@ TEST(Reproject, OnePassWithTheAccumulationGivesTheTwoPassResult) {
     h.fillRandom(h.planes(history), next);
     h.fillRandom(h.planes(h.a), next);  // this frame, filtered
     h.fillRandom(h.planes(albedo), next, 0.5f);
+    // Depth slopes and normals that vary, for the slopes the one-pass form computes itself.
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = h.layout.index(x, y);
+            h.depth.data()[i] = 5.0f + 0.01f * float(x) + 0.004f * float(y * y);
+            h.planes(h.normal).store(
+                i, normalize(make3(0.1f * (next() - 0.5f), 0.1f * (next() - 0.5f), -1.0f)));
+        }
     // The wall pixel (x, y) is world (x, y, 5); object 0 is static, object 1 moved 2.6 pixels
     // right and 0.7 up since the previous frame (its left edge then samples object 0).
     ObjectReprojection objects[2] = {};
@@ -541,7 +550,7 @@ TEST(Reproject, OnePassWithTheAccumulationGivesTheTwoPassResult) {
                                objects,
                                2,
                                h.planeSet(derivatives),
-                               HistoryTest{0, 10.0f, 16.0f},
+                               HistoryTest{1, 10.0f, 16.0f},
                                h.planes(history),
                                out,
                                validity,
@@ -560,10 +569,14 @@ TEST(Reproject, OnePassWithTheAccumulationGivesTheTwoPassResult) {
                                          h.planes(albedo),
                                          rgb};
     };
+    h.device->launch(GeometryDerivativesKernel{h.gbuffer(), h.planeSet(derivatives)}, w, hgt);
     h.device->launch(ColorRowSumsKernel{h.gbuffer(), h.planes(h.a), h.sumPlanes(), 2}, w, hgt);
     h.device->launch(reproject(h.planes(reprojected), h.validity.data()), w, hgt);
     h.device->launch(accumulate(h.planes(twoPass), rgbTwo.data()), w, hgt);
-    const ReprojectAccumulateKernel fused{reproject({}, codes.data()),
+    // Without the derivative planes: it computes the slopes.
+    ReprojectKernel noDerivatives = reproject({}, codes.data());
+    noDerivatives.derivatives = {};
+    const ReprojectAccumulateKernel fused{noDerivatives,
                                           accumulate(h.planes(onePass), rgbOne.data())};
     for (int y = 0; y < hgt; ++y)
         for (int x = 0; x < w; ++x) fused(x, y);

@@ -54,8 +54,10 @@ using AccumulateModulatedWideKernel = AccumulateModulated<kWideWindow>;
 
 // The reprojection and the (modulated) accumulation as one pass, for a device that
 // prefersFusedPasses (a GPU): the history stays in registers instead of going through the
-// reprojected planes and back (as SvgfTemporal does for SVGF). Its `reproject.reprojected` and
-// `accumulate.reprojected`/`validity` inputs are unused.
+// reprojected planes and back (as SvgfTemporal does for SVGF), and the depth slopes and normal
+// change the history test needs are computed here from the neighbours (GeometryDerivatives)
+// instead of read from a geometry pass's planes. Its `reproject.derivatives` and
+// `reproject.reprojected`, `accumulate.reprojected` and `accumulate.validity` are unused.
 template <int MaxRadius>
 struct ReprojectAccumulate {
     ReprojectKernel reproject;
@@ -64,7 +66,8 @@ struct ReprojectAccumulate {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = reproject.g.layout.index(x, y);
         std::uint8_t code;
-        Float3 history = reproject.sample<false>(i, 0, code);
+        GeometrySlopes slopes = GeometryDerivativesKernel{reproject.g, {}}.slopes(i);
+        Float3 history = reproject.sample<false>(i, 0, code, slopes);
         reproject.validity[i] = code;
         accumulate.blend(x, y, i, history, code == kReprojectionValid);
     }

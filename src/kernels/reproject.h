@@ -71,7 +71,15 @@ RTD_HOST_DEVICE RTD_INLINE void loadTaps(const Planes3& planes, const HistoryTap
     loadTaps(planes.data + 2 * planes.planeSize, taps, z);
 }
 
-// Locates pixel i's history. `derivatives`: planes dz/dx, dz/dy, fwidth(n) of the current frame.
+// The current frame's depth slopes and normal change at a pixel (GeometryDerivatives).
+struct GeometrySlopes {
+    float dzdx, dzdy, fwidthNormal;
+};
+RTD_HOST_DEVICE RTD_INLINE GeometrySlopes slopesAt(const PlaneSet& derivatives, PixelIndex i) {
+    return {derivatives.at(0, i), derivatives.at(1, i), derivatives.at(2, i)};
+}
+
+// Locates pixel i's history. `slopes`: the current frame's at i (GeometryDerivatives).
 // Search3x3: when all four bilinear taps fail the history test, average the 3x3 taps that pass.
 // Branch-free: every test yields a mask, and a pixel that fails one still computes the rest on
 // safe (clamped) coordinates; needs layout.padding >= 2.
@@ -82,7 +90,7 @@ RTD_HOST_DEVICE RTD_INLINE void loadTaps(const Planes3& planes, const HistoryTap
 template <bool Search3x3, bool KnownId = false, bool Interleaved = false>
 RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     const GBufferView& g, PixelIndex i, const PreviousGeometry& previous,
-    const ObjectReprojection* objects, int objectCount, const PlaneSet& derivatives,
+    const ObjectReprojection* objects, int objectCount, GeometrySlopes slopes,
     const HistoryTest& test, int hasHistory, std::int32_t knownId = 0) {
     constexpr int kTaps = Search3x3 ? 9 : 4;
     const Layout& L = g.layout;
@@ -108,9 +116,9 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     float depth;
     loadNormalDepth<Interleaved>(g, i, normal, depth);
     Float3 expectedNormal = normalize(transformVector(object.currentWorldToPreviousWorld, normal));
-    float dzdx = derivatives.at(0, i), dzdy = derivatives.at(1, i);
+    float dzdx = slopes.dzdx, dzdy = slopes.dzdy;
     float fwidthDepth = absf(dzdx) + absf(dzdy);
-    float fwidthNormal = derivatives.at(2, i);
+    float fwidthNormal = slopes.fwidthNormal;
 
     float floorX = std::floor(sx), floorY = std::floor(sy);
     float fx = sx - floorX, fy = sy - floorY;
@@ -224,11 +232,15 @@ struct GeometryDerivatives {
             return;
         }
         // All read before any store (the stores could alias the inputs for the compiler).
-        float dzdx = slope(i, 1), dzdy = slope(i, L.pitch);
-        float fwidthNormal = normalChange(i, 1) + normalChange(i, L.pitch);
-        out.at(0, i) = dzdx;
-        out.at(1, i) = dzdy;
-        out.at(2, i) = fwidthNormal;
+        GeometrySlopes s = slopes(i);
+        out.at(0, i) = s.dzdx;
+        out.at(1, i) = s.dzdy;
+        out.at(2, i) = s.fwidthNormal;
+    }
+    // An object pixel's (ReprojectAccumulate computes them where it needs them).
+    RTD_HOST_DEVICE RTD_INLINE GeometrySlopes slopes(PixelIndex i) const {
+        const PixelIndex down = g.layout.pitch;
+        return {slope(i, 1), slope(i, down), normalChange(i, 1) + normalChange(i, down)};
     }
 };
 using GeometryDerivativesKernel = GeometryDerivatives<false>;
@@ -263,8 +275,14 @@ struct ReprojectKernel {
     template <bool KnownId>
     RTD_HOST_DEVICE RTD_INLINE Float3 sample(PixelIndex i, std::int32_t id,
                                              std::uint8_t& code) const {
-        auto taps = findHistory<false, KnownId>(g, i, previous, objects, objectCount, derivatives,
-                                                test, hasHistory, id);
+        return sample<KnownId>(i, id, code, slopesAt(derivatives, i));
+    }
+    // With the slopes given (ReprojectAccumulate: computed, not read from `derivatives`).
+    template <bool KnownId>
+    RTD_HOST_DEVICE RTD_INLINE Float3 sample(PixelIndex i, std::int32_t id, std::uint8_t& code,
+                                             GeometrySlopes slopes) const {
+        auto taps = findHistory<false, KnownId>(g, i, previous, objects, objectCount, slopes, test,
+                                                hasHistory, id);
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps];
         loadTaps(history, taps, r, gr, b);

@@ -149,8 +149,8 @@ struct SvgfReproject {
     template <bool KnownId, bool Interleaved = false, bool Search = Search3x3>
     RTD_HOST_DEVICE RTD_INLINE SvgfHistorySample sample(PixelIndex i, std::int32_t id,
                                                         std::uint8_t& code) const {
-        auto taps = findHistory<Search, KnownId, Interleaved>(g, i, previous, objects, objectCount,
-                                                              derivatives, test, hasHistory, id);
+        auto taps = findHistory<Search, KnownId, Interleaved>(
+            g, i, previous, objects, objectCount, slopesAt(derivatives, i), test, hasHistory, id);
         code = taps.code;
         constexpr int kTaps = decltype(taps)::kCount;
         float r[kTaps], gr[kTaps], b[kTaps], means[kTaps], variances[kTaps], lengths[kTaps];
