@@ -111,11 +111,13 @@ struct Atrous {
                       tap(iA + L.offset(dx * Stride, 3 * Stride)), log2Kernel(dx, 2));
         // Rows -1..2 of A's (-2..1 of B's), but for the centres.
         RTD_UNROLL
-        for (int row = -1; row <= 2; ++row) RTD_UNROLL
-        for (int dx = -2; dx <= 2; ++dx) {
-            if (dx == 0 && (row == 0 || row == 1)) continue;
-            Tap t = tap(iA + L.offset(dx * Stride, row * Stride));
-            addCouple(terms, a, t, log2Kernel(dx, row), b, t, log2Kernel(dx, row - 1));
+        for (int row = -1; row <= 2; ++row) {
+            RTD_UNROLL
+            for (int dx = -2; dx <= 2; ++dx) {
+                if (dx == 0 && (row == 0 || row == 1)) continue;
+                Tap t = tap(iA + L.offset(dx * Stride, row * Stride));
+                addCouple(terms, a, t, log2Kernel(dx, row), b, t, log2Kernel(dx, row - 1));
+            }
         }
         addCouple(terms, a, centreB, log2Kernel(0, 1), b, centreA, log2Kernel(0, -1));
         finish(x, y, iA, centreA.color, a.sum, a.sumW, idA);

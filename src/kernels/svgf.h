@@ -546,11 +546,13 @@ struct SvgfAtrous {
                       tap(iA + L.offset(dx * Stride, 3 * Stride)));
         // Rows -1..2 of A's (-2..1 of B's), but for the centres.
         RTD_UNROLL
-        for (int row = -1; row <= 2; ++row) RTD_UNROLL
-        for (int dx = -2; dx <= 2; ++dx) {
-            if (dx == 0 && (row == 0 || row == 1)) continue;
-            const Tap t = tap(iA + L.offset(dx * Stride, row * Stride));
-            addCouple(a, dx, row, t, b, dx, row - 1, t);
+        for (int row = -1; row <= 2; ++row) {
+            RTD_UNROLL
+            for (int dx = -2; dx <= 2; ++dx) {
+                if (dx == 0 && (row == 0 || row == 1)) continue;
+                const Tap t = tap(iA + L.offset(dx * Stride, row * Stride));
+                addCouple(a, dx, row, t, b, dx, row - 1, t);
+            }
         }
         addCouple(a, 0, 1, centreB, b, 0, -1, centreA);
         finish(x, y, iA, a, foregroundA, centreA.color, centreA.variance);
