@@ -31,7 +31,9 @@ class Device {
     virtual bool interleavesGuide() const { return false; }
     // True where passes the CPU keeps apart run better as one (a GPU): there a pass's
     // intermediate planes cost a round trip through memory, and a rare branch (SVGF's 3x3
-    // history search) only its warp. The CPU splits them so that each vectorises.
+    // history search) only its warp. The CPU splits them so that each vectorises. (SVGF's
+    // temporal stage, SvgfTemporal; the temporal method's geometry slopes, reprojection and
+    // accumulation, ReprojectAccumulate.)
     virtual bool prefersFusedPasses() const { return false; }
 
     virtual void* allocate(std::size_t bytes) = 0;
