@@ -87,8 +87,7 @@ struct PairedRows {
 // strides).
 struct DefaultLaunch {
     static constexpr int kMinBlocks = 6;
-    static constexpr int kFixedStridesUpTo = 0;
-    static constexpr bool kPairsRows = false;  // fixed strides run as PairedRows
+    static constexpr int kFixedStridesUpTo = 0;  // a family with fixed strides says kPairsRows
 };
 template <class Kernel>
 struct LaunchTraits : DefaultLaunch {};
