@@ -198,14 +198,19 @@ struct Denoiser::Impl {
                 float(sv.maxHistory)};
     }
 
-    // A window kernel (window_sums.h) in the instantiation that covers `radius`: the 7x7 one
-    // where it suffices, else the widest.
+    // Calls run.operator()<MaxRadius>() with the window instantiation (window_sums.h) that
+    // covers `radius`: the 7x7 one where it suffices, else the widest.
+    template <class Run>
+    static void forWindow(int radius, Run&& run) {
+        if (radius <= kNarrowWindow)
+            run.template operator()<kNarrowWindow>();
+        else
+            run.template operator()<kWideWindow>();
+    }
+    // A window kernel in the instantiation that covers `radius` (forWindow).
     template <template <int> class Kernel, class... Fields>
     void launchWindowed(int radius, const Fields&... fields) {
-        if (radius <= kNarrowWindow)
-            launch(Kernel<kNarrowWindow>{fields...});
-        else
-            launch(Kernel<kWideWindow>{fields...});
+        forWindow(radius, [&]<int R>() { launch(Kernel<R>{fields...}); });
     }
 
     // How far a window kernel of this radius reads (its compile-time width, window_sums.h).
@@ -400,61 +405,57 @@ struct Denoiser::Impl {
         addPass("clamp-rows", {"filtered", "objectId"}, {"windowSums"}, [this, radius] {
             launchWindowed<ColorRowSums>(radius, gbuffer(), planes(filtered), sums(), radius);
         });
+        // The accumulation modulates too: the result goes out from registers, not read back by
+        // a modulate pass.
+        auto accumulate = [this, alpha, k, radius]<int R>() {
+            return AccumulateModulated<R>{gbuffer(),
+                                          sums(),
+                                          planes(filtered),
+                                          planes(reprojected),
+                                          validity.data(),
+                                          planes(history[current]),
+                                          alpha,
+                                          k,
+                                          radius,
+                                          planes(albedo),
+                                          outputTarget};
+        };
         if (fused) {
             // One pass, the history in registers and the slopes computed (ReprojectAccumulate).
             addPass("reproject-accumulate",
                     {"position", "normal", "depth", "objectId", "previous geometry", "history",
                      "matrices", "filtered", "windowSums", "albedo"},
-                    {"history", "validity", "output"}, [this, alpha, k, radius] {
-                        ReprojectKernel reproject{gbuffer(),
-                                                  previousGeometry(),
-                                                  objects.data(),
-                                                  objectCount,
-                                                  planeSet(derivatives),
-                                                  historyTest(),
-                                                  planes(history[previous()]),
-                                                  {},
-                                                  validity.data(),
-                                                  hasHistory ? 1 : 0};
-                        auto accumulate = [&]<int R>() {
-                            return AccumulateModulated<R>{gbuffer(),
-                                                          sums(),
-                                                          planes(filtered),
-                                                          {},
-                                                          nullptr,
-                                                          planes(history[current]),
-                                                          alpha,
-                                                          k,
-                                                          radius,
-                                                          planes(albedo),
-                                                          outputTarget};
-                        };
-                        if (radius <= kNarrowWindow)
-                            launch(ReprojectAccumulateKernel{
-                                reproject, accumulate.template operator()<kNarrowWindow>()});
-                        else
-                            launch(ReprojectAccumulateWideKernel{
-                                reproject, accumulate.template operator()<kWideWindow>()});
+                    {"history", "validity", "output"}, [this, radius, accumulate] {
+                        forWindow(radius, [&]<int R>() {
+                            launch(ReprojectAccumulate<R>{reprojectKernel(),
+                                                          accumulate.template operator()<R>()});
+                        });
                     });
             return;
         }
         addPass("reproject",
                 {"position", "normal", "depth", "objectId", "derivatives", "previous geometry",
                  "history", "matrices"},
-                {"reprojected", "validity"}, [this] {
-                    launch(ReprojectKernel{gbuffer(), previousGeometry(), objects.data(),
-                                           objectCount, planeSet(derivatives), historyTest(),
-                                           planes(history[previous()]), planes(reprojected),
-                                           validity.data(), hasHistory ? 1 : 0});
-                });
-        // Modulates too: the result goes out from registers, not read back by a modulate pass.
+                {"reprojected", "validity"}, [this] { launch(reprojectKernel()); });
         addPass("accumulate", {"filtered", "windowSums", "reprojected", "validity", "albedo"},
-                {"history", "output"}, [this, alpha, k, radius] {
-                    launchWindowed<AccumulateModulated>(radius, gbuffer(), sums(), planes(filtered),
-                                                        planes(reprojected), validity.data(),
-                                                        planes(history[current]), alpha, k, radius,
-                                                        planes(albedo), outputTarget);
+                {"history", "output"}, [this, radius, accumulate] {
+                    forWindow(radius,
+                              [&]<int R>() { launch(accumulate.template operator()<R>()); });
                 });
+    }
+    // The temporal method's reprojection into `reprojected` (unallocated, and unused by
+    // ReprojectAccumulate, where the device prefers fused passes).
+    ReprojectKernel reprojectKernel() const {
+        return {gbuffer(),
+                previousGeometry(),
+                objects.data(),
+                objectCount,
+                planeSet(derivatives),
+                historyTest(),
+                planes(history[previous()]),
+                planes(reprojected),
+                validity.data(),
+                hasHistory ? 1 : 0};
     }
 
     // Where an svgf stage keeps illumination + variance (4 planes).

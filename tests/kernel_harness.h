@@ -20,6 +20,29 @@ struct UnitRandom {
     }
 };
 
+// Runs a kernel's GPU form in pixel pairs (filterPair<Stride>) over a w x h image on the CPU,
+// with the CUDA launcher's mapping (PairedRows): thread row r takes row top = 2 Stride
+// floor(r / Stride) + r mod Stride and the row Stride below it; a top whose partner lies outside
+// the image is filtered alone. stride: 1, 2 or 4.
+template <class Kernel>
+void runInPixelPairs(const Kernel& kernel, int stride, int w, int h) {
+    auto run = [&]<int Stride>() {
+        const int threadRows = (h + 2 * Stride - 1) / (2 * Stride) * Stride;
+        for (int r = 0; r < threadRows; ++r) {
+            const int top = r / Stride * (2 * Stride) + r % Stride;
+            for (int x = 0; x < w; ++x) {
+                if (top + Stride < h)
+                    kernel.template filterPair<Stride>(x, top);
+                else if (top < h)
+                    kernel.template filter<Stride>(x, top);
+            }
+        }
+    };
+    stride == 1   ? run.template operator()<1>()
+    : stride == 2 ? run.template operator()<2>()
+                  : run.template operator()<4>();
+}
+
 // Padded planar buffers for a w x h image, as the Denoiser lays them out.
 struct Harness {
     // A flat wall facing the camera (normal -z, z = 5), one object, everything else 0.

@@ -3,6 +3,7 @@
 // device over padded buffers built here.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -207,7 +208,7 @@ TEST(Atrous, SquareRootFreeNormalTermGivesTheSameResultWhereOppositeNormalsVanis
 }
 
 // The GPU's pairs of pixels a stride apart (Atrous::filterPair, as the CUDA launcher maps them:
-// tops of 2-stride row blocks, a top whose partner is outside the image filtered alone) give
+// runInPixelPairs) give
 // filter's result up to rounding (other pairs share the divisions). Random normals, positions,
 // colours, two objects and background (a pair with both, one with neither object pixel).
 TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
@@ -227,15 +228,6 @@ TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
     h.ids.data()[h.layout.index(7, 8)] = h.ids.data()[h.layout.index(7, 9)] = -1;  // stride 1
     const EdgeStoppingTerms terms{1.0f / (2.0f * 0.6f * 0.6f), 1.0f / (2.0f * 0.1f * 0.1f),
                                   1.0f / (2.0f * 0.1f * 0.1f)};
-    auto runPairs = [&]<int Stride>(const auto& kernel) {
-        for (int top = 0; top < hgt; top += (top % (2 * Stride) == Stride - 1) ? Stride + 1 : 1)
-            for (int x = 0; x < w; ++x) {
-                if (top + Stride < hgt)
-                    kernel.template filterPair<Stride>(x, top);
-                else
-                    kernel.template filter<Stride>(x, top);
-            }
-    };
     auto expectNear = [&](Float3 single, Float3 paired, int x, int y, int stride) {
         EXPECT_NEAR(paired.x, single.x, 1e-5f * std::fabs(single.x) + 1e-7f)
             << x << ", " << y << " stride " << stride;
@@ -248,9 +240,7 @@ TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
         AtrousNarrowNormalKernel single{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms};
         AtrousNarrowNormalKernel paired{h.gbuffer(), h.planes(h.a), h.planes(h.c), stride, terms};
         h.device->launch(single, w, hgt);
-        stride == 1   ? runPairs.template operator()<1>(paired)
-        : stride == 2 ? runPairs.template operator()<2>(paired)
-                      : runPairs.template operator()<4>(paired);
+        runInPixelPairs(paired, stride, w, hgt);
         for (int y = 0; y < hgt; ++y)
             for (int x = 0; x < w; ++x)
                 expectNear(h.planes(h.b).load(h.layout.index(x, y)),
@@ -266,8 +256,9 @@ TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
     h.device->launch(AtrousModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 2, terms,
                                            h.planes(albedo), rgbSingle.data()},
                      w, hgt);
-    runPairs.template operator()<2>(AtrousModulatedKernel{
-        h.gbuffer(), h.planes(h.a), h.planes(h.b), 2, terms, h.planes(albedo), rgbPaired.data()});
+    runInPixelPairs(AtrousModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), 2, terms,
+                                          h.planes(albedo), rgbPaired.data()},
+                    2, w, hgt);
     for (std::size_t k = 0; k < rgbSingle.size(); ++k)
         ASSERT_NEAR(rgbPaired[k], rgbSingle[k], 1e-5f * std::fabs(rgbSingle[k]) + 1e-7f) << k;
 }
@@ -449,6 +440,21 @@ TEST(CpuLauncher, StridedKernelsVisitEveryPixelOnce) {
     for (std::size_t i = 0; i < visits.size(); ++i) ASSERT_EQ(visits[i], 1) << i;
 }
 
+// The matrices of two objects on the harness's wall, whose pixel (x, y) is world (x, y, 5):
+// object 0 static, object 1 moved (dx, dy) pixels since the previous frame.
+std::array<ObjectReprojection, 2> wallObjectsWithSecondMoved(float dx, float dy) {
+    std::array<ObjectReprojection, 2> objects = {};
+    for (int k = 0; k < 2; ++k) {
+        float mx = k ? dx : 0.0f, my = k ? dy : 0.0f;
+        objects[k].currentWorldToPreviousScreen =
+            Mat4{{{5, 0, 0, 2.5f - 5 * mx}, {0, 5, 0, 2.5f - 5 * my}, {0, 0, 1, 0}, {0, 0, 1, 0}}};
+        objects[k].currentWorldToPreviousWorld =
+            Mat4{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
+        objects[k].valid = 1;
+    }
+    return objects;
+}
+
 // The launcher's runs of one object ID (KeyedRuns: matrices loaded once per run) give what the
 // per-pixel form gives, with two objects moving differently and a mixed run.
 TEST(Reproject, RunsOfOneObjectGiveThePerPixelResult) {
@@ -462,17 +468,9 @@ TEST(Reproject, RunsOfOneObjectGiveThePerPixelResult) {
                         derivatives = h.buffer(3);
     for (int i = 0; i < h.layout.planeSize; ++i)
         h.planes(history).store(i, make3(next(), next(), next()));
-    // The wall pixel (x, y) is world (x, y, 5); object 0 is static, object 1 moved 1.3 pixels
-    // right and 0.4 up since the previous frame.
-    ObjectReprojection objects[2] = {};
-    for (int k = 0; k < 2; ++k) {
-        float dx = k ? 1.3f : 0.0f, dy = k ? -0.4f : 0.0f;
-        objects[k].currentWorldToPreviousScreen =
-            Mat4{{{5, 0, 0, 2.5f - 5 * dx}, {0, 5, 0, 2.5f - 5 * dy}, {0, 0, 1, 0}, {0, 0, 1, 0}}};
-        objects[k].currentWorldToPreviousWorld =
-            Mat4{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
-        objects[k].valid = 1;
-    }
+    // Object 1 moved 1.3 pixels right and 0.4 up since the previous frame.
+    const auto wall = wallObjectsWithSecondMoved(1.3f, -0.4f);
+    const ObjectReprojection* objects = wall.data();
     PreviousGeometry previous{h.ids.data(), h.depth.data(), h.planes(h.normal)};
     std::vector<std::uint8_t> codes(std::size_t(h.layout.planeSize));
     auto kernel = [&](DeviceBuffer<float>& out, std::uint8_t* validity) {
@@ -530,17 +528,10 @@ TEST(Reproject, OnePassWithTheAccumulationGivesTheTwoPassResult) {
             h.planes(h.normal).store(
                 i, normalize(make3(0.1f * (next() - 0.5f), 0.1f * (next() - 0.5f), -1.0f)));
         }
-    // The wall pixel (x, y) is world (x, y, 5); object 0 is static, object 1 moved 2.6 pixels
-    // right and 0.7 up since the previous frame (its left edge then samples object 0).
-    ObjectReprojection objects[2] = {};
-    for (int k = 0; k < 2; ++k) {
-        float dx = k ? 2.6f : 0.0f, dy = k ? -0.7f : 0.0f;
-        objects[k].currentWorldToPreviousScreen =
-            Mat4{{{5, 0, 0, 2.5f - 5 * dx}, {0, 5, 0, 2.5f - 5 * dy}, {0, 0, 1, 0}, {0, 0, 1, 0}}};
-        objects[k].currentWorldToPreviousWorld =
-            Mat4{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
-        objects[k].valid = 1;
-    }
+    // Object 1 moved 2.6 pixels right and 0.7 up since the previous frame (its left edge then
+    // samples object 0).
+    const auto wall = wallObjectsWithSecondMoved(2.6f, -0.7f);
+    const ObjectReprojection* objects = wall.data();
     PreviousGeometry previous{h.ids.data(), h.depth.data(), h.planes(h.normal)};
     std::vector<std::uint8_t> codes(std::size_t(h.layout.planeSize), 0);
     std::vector<float> rgbTwo(3 * w * hgt), rgbOne(3 * w * hgt, -1.0f);

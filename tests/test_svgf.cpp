@@ -360,24 +360,13 @@ TEST(SvgfKernels, InterleavedGuideGivesThePlanarKernelsResults) {
             w, h);
         expectSamePlanes(outPlanar, outPacked, 4, "iteration");
         // The GPU's pairs of pixels a stride apart (filterPair, as the CUDA launcher maps them:
-        // tops of 2-stride row blocks, a top whose partner is outside filtered alone) give
+        // runInPixelPairs; a top whose partner is outside filtered alone) give
         // filter's result up to the order of the sums (h = 17 leaves lone tops at strides 2, 4).
         DeviceBuffer<float> outPaired = hs.buffer(4);
         SvgfAtrousInterleavedKernel paired{packed,          hs.planeSet(derivatives),
                                            hs.planeSet(in), hs.planeSet(outPaired),
                                            stride,          terms};
-        auto runPairs = [&]<int Stride>() {
-            for (int top = 0; top < h; top += (top % (2 * Stride) == Stride - 1) ? Stride + 1 : 1)
-                for (int x = 0; x < w; ++x) {
-                    if (top + Stride < h)
-                        paired.filterPair<Stride>(x, top);
-                    else
-                        paired.filter<Stride>(x, top);
-                }
-        };
-        stride == 1   ? runPairs.template operator()<1>()
-        : stride == 2 ? runPairs.template operator()<2>()
-                      : runPairs.template operator()<4>();
+        runInPixelPairs(paired, stride, w, h);
         expectSamePlanes(outPacked, outPaired, 4, "iteration in pairs");
         // Background passes through: skipped by a branch in the GPU's form, computed and then
         // replaced in the CPU's (where the background pixel beside it would have mixed in).

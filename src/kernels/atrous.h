@@ -3,6 +3,7 @@
 // edge-stopping terms. Each level filters the previous level's output.
 #pragma once
 
+#include "kernels/b3_spline.h"
 #include "kernels/edge_stopping.h"
 #include "kernels/modulate.h"
 #include "kernels/views.h"
@@ -32,8 +33,6 @@ struct Atrous {
     template <int FixedStride>
     RTD_HOST_DEVICE RTD_INLINE void filter(int x, int y) const {
         const int step = FixedStride > 0 ? FixedStride : stride;
-        // log2 of the B3 spline's taps 1/16, 1/4, 3/8, 1/4, 1/16.
-        constexpr float kLog2B3[5] = {-4.0f, -2.0f, -1.4150375f, -2.0f, -4.0f};
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 ci = in.load(i);
@@ -46,9 +45,9 @@ struct Atrous {
         const std::int32_t keyI = g.filterKey[i];
         // The centre: all distances 0 but the normal's (n.n rounds to 1 - a few ulp), weight
         // 2^log2k exp(-D_normal^2 / 2sn^2).
-        float centreW = exp2Negative(2.0f * kLog2B3[2] -
-                                     normalAngleSquared<OppositeNormalsVanish>(dot(ni, ni)) *
-                                         terms.normalScale);
+        float centreW =
+            exp2Negative(log2B3(0, 0) - normalAngleSquared<OppositeNormalsVanish>(dot(ni, ni)) *
+                                            terms.normalScale);
         Float3 sum = ci * centreW;
         float sumW = centreW;
         // The other 24 taps as 12 pairs at +offset and -offset, which share their kernel value
@@ -59,7 +58,7 @@ struct Atrous {
             PixelIndex o = L.offset((tx - 2) * step, (ty - 2) * step);
             PixelIndex ja = i + o, jb = i - o;
             // The kernel value k = 2^log2k enters the exponent: no multiplication.
-            const float log2Kernel = kLog2B3[ty] + kLog2B3[tx];
+            const float log2Kernel = log2B3(tx - 2, ty - 2);
             Float3 ca = in.load(ja), cb = in.load(jb);
             EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(
                 terms, centre, ca, g.normal.load(ja), g.position.load(ja), log2Kernel);
@@ -91,8 +90,6 @@ struct Atrous {
     // centres, each a tap of the other. Each pixel gets filter's result up to rounding.
     template <int Stride>
     RTD_HOST_DEVICE RTD_INLINE void filterPair(int x, int y) const {
-        constexpr float kLog2B3[5] = {-4.0f, -2.0f, -1.4150375f, -2.0f, -4.0f};
-        auto log2Kernel = [&](int dx, int dy) { return kLog2B3[dy + 2] + kLog2B3[dx + 2]; };
         const Layout& L = g.layout;
         const PixelIndex iA = L.index(x, y), iB = iA + L.offset(0, Stride);
         const std::int32_t idA = g.objectId[iA], idB = g.objectId[iB];
@@ -107,8 +104,8 @@ struct Atrous {
         // A's row -2 with B's row +2 (rows -2 and 3 of A's).
         RTD_UNROLL
         for (int dx = -2; dx <= 2; ++dx)
-            addCouple(terms, a, tap(iA + L.offset(dx * Stride, -2 * Stride)), log2Kernel(dx, -2), b,
-                      tap(iA + L.offset(dx * Stride, 3 * Stride)), log2Kernel(dx, 2));
+            addCouple(terms, a, tap(iA + L.offset(dx * Stride, -2 * Stride)), log2B3(dx, -2), b,
+                      tap(iA + L.offset(dx * Stride, 3 * Stride)), log2B3(dx, 2));
         // Rows -1..2 of A's (-2..1 of B's), but for the centres.
         RTD_UNROLL
         for (int row = -1; row <= 2; ++row) {
@@ -116,10 +113,10 @@ struct Atrous {
             for (int dx = -2; dx <= 2; ++dx) {
                 if (dx == 0 && (row == 0 || row == 1)) continue;
                 Tap t = tap(iA + L.offset(dx * Stride, row * Stride));
-                addCouple(terms, a, t, log2Kernel(dx, row), b, t, log2Kernel(dx, row - 1));
+                addCouple(terms, a, t, log2B3(dx, row), b, t, log2B3(dx, row - 1));
             }
         }
-        addCouple(terms, a, centreB, log2Kernel(0, 1), b, centreA, log2Kernel(0, -1));
+        addCouple(terms, a, centreB, log2B3(0, 1), b, centreA, log2B3(0, -1));
         finish(x, y, iA, centreA.color, a.sum, a.sumW, idA);
         finish(x, y + Stride, iB, centreB.color, b.sum, b.sumW, idB);
     }
@@ -141,8 +138,7 @@ struct Atrous {
     };
     // The centre tap alone (as in filter).
     RTD_HOST_DEVICE RTD_INLINE Sums centreSums(const EdgeStoppingTerms& terms, const Tap& c) const {
-        constexpr float kLog2Centre = 2.0f * -1.4150375f;  // log2 (3/8)^2
-        float w = exp2Negative(kLog2Centre -
+        float w = exp2Negative(log2B3(0, 0) -
                                normalAngleSquared<OppositeNormalsVanish>(dot(c.normal, c.normal)) *
                                    terms.normalScale);
         return {edgeStoppingCentre(terms, c.color, c.normal, c.position), c.key, c.color * w, w};

@@ -12,6 +12,7 @@
 // which made results depend on the rounding of each instruction set and back end.
 #pragma once
 
+#include "kernels/b3_spline.h"
 #include "kernels/modulate.h"
 #include "kernels/reproject.h"
 #include "kernels/views.h"
@@ -33,10 +34,15 @@ struct SvgfCentre {
     float luminanceScale;  // log2(e) / phi_l: the luminance term in base 2
 };
 
-// The depth term's scale for a tap `offset` pixels away, log2(e) / (sigma_z |grad z . offset| +
-// eps): one division serves the taps at +offset and -offset (the slope's magnitude is the same).
+// The depth term's denominator for a tap `offset` pixels away, sigma_z |grad z . offset| + eps
+// (depthAlongOffset: grad z . offset).
+RTD_HOST_DEVICE RTD_INLINE float svgfDepthDenominator(const SvgfTerms& t, float depthAlongOffset) {
+    return t.sigmaDepth * absf(depthAlongOffset) + 1e-3f;
+}
+// Its scale, log2(e) / denominator: one division serves the taps at +offset and -offset (the
+// slope's magnitude is the same).
 RTD_HOST_DEVICE RTD_INLINE float svgfDepthScale(const SvgfTerms& t, float depthAlongOffset) {
-    return divideApprox(kLog2e, t.sigmaDepth * absf(depthAlongOffset) + 1e-3f);
+    return divideApprox(kLog2e, svgfDepthDenominator(t, depthAlongOffset));
 }
 
 // The SVGF edge-stopping weight between a centre and a tap (before the tap mask), times the
@@ -401,10 +407,6 @@ struct SvgfAtrous {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { filter<0>(x, y); }
 
-    // The B3 spline's centre value squared, (3/8)^2: the centre tap's weight is 1 (no depth,
-    // luminance or normal difference) times that.
-    static constexpr float kCentre = 0.375f * 0.375f;
-
     // One centre pixel's weighting terms and its sums over the taps so far.
     struct Centre {
         SvgfCentre weight;
@@ -440,9 +442,9 @@ struct SvgfAtrous {
                 derivatives.at(0, i) * float(step),
                 derivatives.at(1, i) * float(step),
                 g.filterKey[i],
-                cI * kCentre,
-                kCentre * kCentre * varianceI,
-                kCentre};
+                cI * kB3Centre,
+                kB3Centre * kB3Centre * varianceI,
+                kB3Centre};
     }
     // The depth term's scale for the taps at (ax, ay) and (-ax, -ay) tap steps away (one
     // division serves both; svgfDepthScale).
@@ -454,11 +456,8 @@ struct SvgfAtrous {
     RTD_HOST_DEVICE RTD_INLINE void addTap(Centre& c, int ax, int ay, float scale, Float3 cj,
                                            float varianceJ, Float3 nj, float zj,
                                            std::int32_t keyJ) const {
-        // log2 of the B3 spline's 3/8, 1/4, 1/16 by |tap offset| (in the exponent).
-        constexpr float kLog2B3[3] = {-1.4150375f, -2.0f, -4.0f};
-        float log2Kernel = kLog2B3[ax < 0 ? -ax : ax] + kLog2B3[ay < 0 ? -ay : ay];
-        float w =
-            svgfWeight<FixedSigmaNormal>(terms, c.weight, scale, zj, nj, luminance(cj), log2Kernel);
+        float w = svgfWeight<FixedSigmaNormal>(terms, c.weight, scale, zj, nj, luminance(cj),
+                                               log2B3(ax, ay));
         w = keyJ == c.key ? w : 0.0f;
         c.sum += cj * w;
         c.sumVar += w * w * varianceJ;
@@ -579,8 +578,8 @@ struct SvgfAtrous {
     // pairExponents does for the course's filter).
     RTD_HOST_DEVICE RTD_INLINE void addCouple(Centre& a, int ax, int ay, const Tap& ta, Centre& b,
                                               int bx, int by, const Tap& tb) const {
-        float dA = terms.sigmaDepth * absf(a.stepX * float(ax) + a.stepY * float(ay)) + 1e-3f;
-        float dB = terms.sigmaDepth * absf(b.stepX * float(bx) + b.stepY * float(by)) + 1e-3f;
+        float dA = svgfDepthDenominator(terms, a.stepX * float(ax) + a.stepY * float(ay));
+        float dB = svgfDepthDenominator(terms, b.stepX * float(bx) + b.stepY * float(by));
         float inverse = divideApprox(kLog2e, dA * dB);
         addTap(a, ax, ay, dB * inverse, ta.color, ta.variance, ta.normal, ta.depth, ta.key);
         addTap(b, bx, by, dA * inverse, tb.color, tb.variance, tb.normal, tb.depth, tb.key);

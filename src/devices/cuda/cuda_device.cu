@@ -83,8 +83,8 @@ struct PairedRows {
 // How each kernel is launched, one entry per kernel family: kMinBlocks, its register budget (the
 // minimum of resident blocks per SM, above; 3 allows 170 registers); kFixedStridesUpTo, the
 // strides up to which it runs as FixedStride<Kernel, s>, or as PairedRows<Kernel, s> where
-// kPairsRows; fixedStrideMinBlocks(s) and pairMinBlocks(s), their budgets (where there are such
-// strides).
+// kPairsRows; fixedStrideMinBlocks() or pairMinBlocks(), their budget (functions: nvcc warns of
+// a constant that an instantiation does not use).
 struct DefaultLaunch {
     static constexpr int kMinBlocks = 6;
     static constexpr int kFixedStridesUpTo = 0;  // a family with fixed strides says kPairsRows
@@ -99,9 +99,8 @@ template <bool NarrowNormal, bool Modulated>
 struct LaunchTraits<Atrous<NarrowNormal, Modulated>> : DefaultLaunch {
     static constexpr int kMinBlocks = 4;
     static constexpr int kFixedStridesUpTo = 16;
-    static constexpr int fixedStrideMinBlocks(int stride) { return stride == 1 ? 4 : 3; }
     static constexpr bool kPairsRows = true;
-    static constexpr int pairMinBlocks(int) { return 3; }
+    static constexpr int pairMinBlocks() { return 3; }
 };
 // SVGF's with the guide interleaved: in pairs at 128 registers (PairedRows, above). Alone
 // (before the pairs), 128 at stride 1 and 102 from stride 2 had been the best (102 against 128 at
@@ -110,11 +109,10 @@ template <int FixedSigmaNormal, bool Modulated, bool Interleaved>
 struct LaunchTraits<SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved>> : DefaultLaunch {
     static constexpr int kMinBlocks = 5;
     static constexpr int kFixedStridesUpTo = 16;
-    static constexpr int fixedStrideMinBlocks(int stride) {
-        return Interleaved && stride > 1 ? 5 : 4;
-    }
     static constexpr bool kPairsRows = Interleaved;  // filterPair is the interleaved form's
-    static constexpr int pairMinBlocks(int) { return 4; }
+    static constexpr int pairMinBlocks() { return 4; }
+    // The planar forms' (the CPU's, compiled here but not run: the CUDA device interleaves).
+    static constexpr int fixedStrideMinBlocks() { return 4; }
 };
 // SVGF's one-pass temporal stage at 64 registers: its history gathers wait on memory (Nsight: 10
 // warps stalled on loads per issue at 35 % occupancy), and 16 more warps per SM hide more of it
@@ -132,11 +130,11 @@ struct LaunchTraits<SvgfVariance<FixedSigmaNormal, false>> : DefaultLaunch {
 };
 template <class Kernel, int Stride>
 struct LaunchTraits<FixedStride<Kernel, Stride>> : DefaultLaunch {
-    static constexpr int kMinBlocks = LaunchTraits<Kernel>::fixedStrideMinBlocks(Stride);
+    static constexpr int kMinBlocks = LaunchTraits<Kernel>::fixedStrideMinBlocks();
 };
 template <class Kernel, int Stride>
 struct LaunchTraits<PairedRows<Kernel, Stride>> : DefaultLaunch {
-    static constexpr int kMinBlocks = LaunchTraits<Kernel>::pairMinBlocks(Stride);
+    static constexpr int kMinBlocks = LaunchTraits<Kernel>::pairMinBlocks();
 };
 
 template <class Kernel>
