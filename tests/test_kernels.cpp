@@ -2,9 +2,11 @@
 // positions per level, the history clamp and blend, firefly removal. Kernels run on the CPU
 // device over padded buffers built here.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <array>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "devices/cpu/parallel_for.h"
@@ -261,6 +263,93 @@ TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
                     2, w, hgt);
     for (std::size_t k = 0; k < rgbSingle.size(); ++k)
         ASSERT_NEAR(rgbPaired[k], rgbSingle[k], 1e-5f * std::fabs(rgbSingle[k]) + 1e-7f) << k;
+}
+
+// The CPU's form that evaluates each pair of pixels once for both (filterSharingPairs, its
+// weights carried between rows in each core's ring) gives filter's result up to rounding: at
+// every stride, in plain and interleaved row order, with 1 to 5 cores (the rows above each
+// core's first rows run for their weights; above the image they weigh nothing). Random normals,
+// positions, colours, two objects and background; the general and the narrow normal term and
+// the modulated last level.
+TEST(Atrous, PairsSharedBetweenRowsGiveThePerPixelResult) {
+    const int w = 37, hgt = 45;
+    Harness h(w, hgt, 32);
+    UnitRandom next{29u};
+    for (int y = 0; y < hgt; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = h.layout.index(x, y);
+            h.planes(h.normal).store(
+                i, normalize(make3(0.6f * (next() - 0.5f), 0.6f * (next() - 0.5f), -1.0f)));
+            h.planes(h.position).store(i, make3(float(x), float(y), 5.0f + next()));
+            h.planes(h.a).store(i, make3(next(), next(), next()));
+            h.ids.data()[i] = (x + 2 * y) % 9 == 0 ? 1 : (x * y) % 13 == 5 ? -1 : 0;
+        }
+    const EdgeStoppingTerms narrow{1.0f / (2.0f * 0.6f * 0.6f), 1.0f / (2.0f * 0.1f * 0.1f),
+                                   1.0f / (2.0f * 0.1f * 0.1f)};
+    const EdgeStoppingTerms wide{1.0f / (2.0f * 0.6f * 0.6f), 1.0f / (2.0f * 0.5f * 0.5f),
+                                 1.0f / (2.0f * 0.3f * 0.3f)};
+    CpuScratch scratch(*h.device);
+    const int threadsBefore = omp_get_max_threads();
+    auto expectPerPixelResult = [&]<class Kernel>(const Kernel& perPixel, const Kernel& shared,
+                                                  int stride, bool interleaved, int cores) {
+        parallelFor2D(w, hgt, perPixel);  // no scratch: the per-pixel form
+        float* memory = scratch.floats(sharingScratchFloats(w, hgt, h.layout.padding));
+        if (interleaved)
+            parallelRowsSharingPairs(
+                w, hgt, shared, [&](int k) { return interleavedRow(k, hgt, stride); }, stride,
+                memory);
+        else
+            parallelRowsSharingPairs(
+                w, hgt, shared, [](int k) { return k; }, 1, memory);
+        for (int y = 0; y < hgt; ++y)
+            for (int x = 0; x < w; ++x) {
+                Float3 want = h.planes(h.b).load(h.layout.index(x, y));
+                Float3 got = h.planes(h.c).load(h.layout.index(x, y));
+                for (auto [g, e] : {std::pair{got.x, want.x}, {got.y, want.y}, {got.z, want.z}})
+                    ASSERT_NEAR(g, e, 1e-5f * std::fabs(e) + 1e-7f)
+                        << x << ", " << y << " stride " << stride << " interleaved " << interleaved
+                        << " cores " << cores;
+            }
+    };
+    for (int cores : {1, 2, 3, 5}) {
+        omp_set_num_threads(cores);
+        for (int stride : {1, 2, 4, 8, 16}) {
+            for (bool interleaved : {false, true}) {
+                if (interleaved && stride == 1) continue;
+                expectPerPixelResult(AtrousNarrowNormalKernel{h.gbuffer(), h.planes(h.a),
+                                                              h.planes(h.b), stride, narrow},
+                                     AtrousNarrowNormalKernel{h.gbuffer(), h.planes(h.a),
+                                                              h.planes(h.c), stride, narrow},
+                                     stride, interleaved, cores);
+                expectPerPixelResult(
+                    AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, wide},
+                    AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.c), stride, wide}, stride,
+                    interleaved, cores);
+            }
+        }
+    }
+    omp_set_num_threads(threadsBefore);
+    // Filtered, not passed through: the result differs from the input; background passes.
+    EXPECT_NE(h.planes(h.c).load(h.layout.index(10, 6)).x,
+              h.planes(h.a).load(h.layout.index(10, 6)).x);
+    ASSERT_EQ(h.ids.data()[h.layout.index(5, 1)], -1);
+    EXPECT_EQ(h.planes(h.c).load(h.layout.index(5, 1)).x,
+              h.planes(h.a).load(h.layout.index(5, 1)).x);
+    // The modulated last level, through the device (its scratch and row order).
+    DeviceBuffer<float> albedo = h.buffer(3);
+    h.fillRandom(h.planes(albedo), next, 0.5f);
+    std::vector<float> rgbPerPixel(3 * w * hgt), rgbShared(3 * w * hgt, -1.0f);
+    for (int stride : {1, 16}) {
+        parallelFor2D(w, hgt,
+                      AtrousModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, wide,
+                                            h.planes(albedo), rgbPerPixel.data()});
+        h.device->launch(AtrousModulatedKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride,
+                                               wide, h.planes(albedo), rgbShared.data()},
+                         w, hgt);
+        for (std::size_t k = 0; k < rgbPerPixel.size(); ++k)
+            ASSERT_NEAR(rgbShared[k], rgbPerPixel[k], 1e-5f * std::fabs(rgbPerPixel[k]) + 1e-7f)
+                << k << " stride " << stride;
+    }
 }
 
 TEST(Accumulate, ClampsHistoryToMeanPlusMinusKSigmaThenBlends) {

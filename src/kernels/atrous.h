@@ -10,6 +10,18 @@
 
 namespace rtd {
 
+// The memory between rows of the CPU's form (Atrous::filterSharingPairs, run by the CPU
+// launcher, parallel_for.h): for each pixel of a row, the weight it has as a tap of each of its
+// kForwardTaps taps in the rows below (those taps as centres). Tap k lies at (dx, dy) = (k % 5 - 2,
+// k / 5 + 1) strides; its plane starts at `row + k * planeStride`, indexed by x from -2 strides.
+constexpr int kForwardTaps = 10;
+struct PartnerWeightRows {
+    float* own = nullptr;           // row y's: written for x in [0, width)
+    const float* above1 = nullptr;  // row y - stride's
+    const float* above2 = nullptr;  // row y - 2 strides'
+    long planeStride = 0;
+};
+
 // Modulated (the atrous method's last level): writes the result times the albedo factor into the
 // caller's interleaved RGB instead of `out` (ModulateKernel's job, fused: nothing reads the
 // last level's planes, so they are not written).
@@ -121,7 +133,104 @@ struct Atrous {
         finish(x, y + Stride, iB, centreB.color, b.sum, b.sumW, idB);
     }
 
+    // The CPU's form. J(i, j) and J(j, i) share all but their plane term's numerator
+    // (edgeStoppingPairParts), so each pair of pixels is evaluated once for both. A pixel
+    // evaluates its 10 taps in the rows below (+1 and +2 strides), keeps their weights and stores
+    // for each the weight it has as that tap's tap (rows.own); its 10 taps in the rows above then
+    // cost a load of that weight (rows.above1/2, stored when those rows ran) and of their colour.
+    // Its 4 taps in its own row are evaluated both ways, as in filter: a store and a load in one
+    // row would make the vector lanes depend on one another. Each pixel gets filter's result up
+    // to rounding. WithResult false: only the stored weights (for the rows above a run of rows).
+    template <bool WithResult>
+    RTD_HOST_DEVICE RTD_INLINE void filterSharingPairs(int x, int y,
+                                                       const PartnerWeightRows& rows) const {
+        const int step = stride;
+        const Layout& L = g.layout;
+        const PixelIndex i = L.index(x, y);
+        const Float3 ci = in.load(i), ni = g.normal.load(i);
+        const EdgeStoppingTerms terms = base2(edges);
+        const EdgeStoppingCentre centre = edgeStoppingCentre(terms, ci, ni, g.position.load(i));
+        const std::int32_t keyI = g.filterKey[i];
+        Float3 sum = {};
+        float sumW = 0.0f;
+        // The taps below, two at a time sharing one division.
+        RTD_UNROLL
+        for (int k = 0; k < kForwardTaps; k += 2) {
+            const PixelIndex ja = i + forwardOffset(k), jb = i + forwardOffset(k + 1);
+            const Float3 ca = in.load(ja), cb = in.load(jb);
+            EdgeStoppingPairParts a = edgeStoppingPairParts<OppositeNormalsVanish>(
+                terms, centre, ca, g.normal.load(ja), g.position.load(ja),
+                log2B3(forwardDx(k), forwardDy(k)));
+            EdgeStoppingPairParts b = edgeStoppingPairParts<OppositeNormalsVanish>(
+                terms, centre, cb, g.normal.load(jb), g.position.load(jb),
+                log2B3(forwardDx(k + 1), forwardDy(k + 1)));
+            const float inverseProduct =
+                divideApprox(1.0f, a.centre.planeDenominator * b.centre.planeDenominator);
+            const float reciprocalA = b.centre.planeDenominator * inverseProduct;
+            const float reciprocalB = a.centre.planeDenominator * inverseProduct;
+            const bool sameA = g.filterKey[ja] == keyI, sameB = g.filterKey[jb] == keyI;
+            // As the taps' centres: their normals are not prescaled, their reciprocal is.
+            float partnerA = exp2Negative(
+                -(a.centre.colorAndNormal + a.tapNumerator * (reciprocalA * terms.planeScale)));
+            float partnerB = exp2Negative(
+                -(b.centre.colorAndNormal + b.tapNumerator * (reciprocalB * terms.planeScale)));
+            rows.own[k * rows.planeStride + x] = sameA ? partnerA : 0.0f;
+            rows.own[(k + 1) * rows.planeStride + x] = sameB ? partnerB : 0.0f;
+            if constexpr (WithResult) {
+                float wa = exp2Negative(
+                    -(a.centre.colorAndNormal + a.centre.planeNumerator * reciprocalA));
+                float wb = exp2Negative(
+                    -(b.centre.colorAndNormal + b.centre.planeNumerator * reciprocalB));
+                wa = sameA ? wa : 0.0f;
+                wb = sameB ? wb : 0.0f;
+                sum += ca * wa + cb * wb;
+                sumW += wa + wb;
+            }
+        }
+        if constexpr (WithResult) {
+            // The taps in this row, at +/- 1 and 2 strides, both ways (as filter's pairs).
+            RTD_UNROLL
+            for (int dx = 1; dx <= 2; ++dx) {
+                const PixelIndex o = L.offset(dx * step, 0), ja = i + o, jb = i - o;
+                const Float3 ca = in.load(ja), cb = in.load(jb);
+                const float log2Kernel = log2B3(dx, 0);
+                EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(
+                    terms, centre, ca, g.normal.load(ja), g.position.load(ja), log2Kernel);
+                EdgeStoppingParts b = edgeStoppingParts<OppositeNormalsVanish>(
+                    terms, centre, cb, g.normal.load(jb), g.position.load(jb), log2Kernel);
+                float exponentA, exponentB;
+                pairExponents(a, b, exponentA, exponentB);
+                float wa = exp2Negative(-exponentA), wb = exp2Negative(-exponentB);
+                wa = g.filterKey[ja] == keyI ? wa : 0.0f;
+                wb = g.filterKey[jb] == keyI ? wb : 0.0f;
+                sum += ca * wa + cb * wb;
+                sumW += wa + wb;
+            }
+            // The taps above: their weights were stored when their rows ran.
+            RTD_UNROLL
+            for (int k = 0; k < kForwardTaps; ++k) {
+                const float* above = forwardDy(k) == 1 ? rows.above1 : rows.above2;
+                const float w = above[k * rows.planeStride + x - forwardDx(k) * step];
+                sum += in.load(i - forwardOffset(k)) * w;
+                sumW += w;
+            }
+            const float centreW =
+                exp2Negative(log2B3(0, 0) - normalAngleSquared<OppositeNormalsVanish>(dot(ni, ni)) *
+                                                terms.normalScale);
+            sum += ci * centreW;
+            sumW += centreW;
+            finish(x, y, i, ci, sum, sumW, g.objectId[i]);
+        }
+    }
+
   private:
+    // filterSharingPairs' taps below the centre, k in [0, kForwardTaps).
+    RTD_HOST_DEVICE static constexpr int forwardDx(int k) { return k % 5 - 2; }
+    RTD_HOST_DEVICE static constexpr int forwardDy(int k) { return k / 5 + 1; }
+    RTD_HOST_DEVICE RTD_INLINE PixelIndex forwardOffset(int k) const {
+        return g.layout.offset(forwardDx(k) * stride, forwardDy(k) * stride);
+    }
+
     // filterPair's pieces.
     struct Tap {
         Float3 color, normal, position;

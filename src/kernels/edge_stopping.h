@@ -95,6 +95,24 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppin
             dp.x * dp.x + (dp.y * dp.y + (dp.z * dp.z + 1e-18f))};
 }
 
+// J(i, j) and J(j, i) together: they share the colour and normal terms (symmetric in i and j,
+// as is the spline's bias) and |dp|^2; only the plane term's numerator differs, each direction
+// taking its own centre's normal. The CPU's A-Trous form evaluates each pair of pixels once for
+// both (Atrous::filterSharingPairs).
+struct EdgeStoppingPairParts {
+    EdgeStoppingParts centre;  // J(i, j), as edgeStoppingParts
+    float tapNumerator;  // (n_j . dp)^2, unscaled: the caller scales its reciprocal by 1/2sp^2
+};
+template <bool OppositeNormalsVanish = false>
+RTD_HOST_DEVICE RTD_INLINE EdgeStoppingPairParts
+edgeStoppingPairParts(const EdgeStoppingTerms& t, const EdgeStoppingCentre& c, Float3 colorJ,
+                      Float3 normalJ, Float3 positionJ, float bias = 0.0f) {
+    EdgeStoppingParts parts =
+        edgeStoppingParts<OppositeNormalsVanish>(t, c, colorJ, normalJ, positionJ, bias);
+    float alongTapNormal = dot(normalJ, positionJ - c.position);
+    return {parts, alongTapNormal * alongTapNormal};
+}
+
 // The whole exponent of one tap, minus `bias` (as in edgeStoppingParts).
 template <bool OppositeNormalsVanish = false>
 RTD_HOST_DEVICE RTD_INLINE float edgeStoppingExponent(const EdgeStoppingTerms& t,

@@ -7,6 +7,7 @@
 #include <new>
 
 #include "devices/cpu/cpu_kernels.h"
+#include "devices/cpu/cpu_scratch.h"
 #include "devices/device.h"
 #include "rtdenoise/error.h"
 
@@ -23,11 +24,19 @@ const CpuKernelTable* cpuKernelsAvx512() {
 }
 #endif
 
+float* CpuScratch::floats(std::size_t count) {
+    if (buffer_.size() < count) {
+        buffer_.reset();  // the old one first: no moment with both held
+        buffer_ = DeviceBuffer<float>(device_, count);
+    }
+    return buffer_.data();
+}
+
 namespace {
 
 class CpuDevice final : public Device {
   public:
-    explicit CpuDevice(CpuIsa isa) : kernels_(cpuKernels(isa)) {}
+    explicit CpuDevice(CpuIsa isa) : kernels_(cpuKernels(isa)), scratch_(*this) {}
     std::string name() const override {
         return "cpu (" + std::to_string(omp_get_max_threads()) + " threads, " +
                toString(kernels_.isa) + ")";
@@ -69,13 +78,14 @@ class CpuDevice final : public Device {
 
 #define RTD_DEFINE_LAUNCH(K)                                       \
     void launch(const K& kernel, int width, int height) override { \
-        kernels_.run##K(kernel, width, height);                    \
+        kernels_.run##K(kernel, width, height, scratch_);          \
     }
     RTD_FOR_EACH_KERNEL(RTD_DEFINE_LAUNCH)
 #undef RTD_DEFINE_LAUNCH
 
   private:
     const CpuKernelTable& kernels_;
+    CpuScratch scratch_;
     std::array<std::chrono::steady_clock::time_point, kTimestampSlots> stamps_{};
 };
 

@@ -5,15 +5,18 @@
 // measured against.
 #pragma once
 
+#include "devices/cpu/cpu_scratch.h"
 #include "kernels/kernel_list.h"
 #include "rtdenoise/settings.h"
 
 namespace rtd {
 
-// One entry per kernel: runs it over a width x height grid of pixels on all cores.
+// One entry per kernel: runs it over a width x height grid of pixels on all cores, with the
+// device's scratch memory.
 struct CpuKernelTable {
     CpuIsa isa;
-#define RTD_TABLE_ENTRY(K) void (*run##K)(const K& kernel, int width, int height);
+#define RTD_TABLE_ENTRY(K) \
+    void (*run##K)(const K& kernel, int width, int height, CpuScratch& scratch);
     RTD_FOR_EACH_KERNEL(RTD_TABLE_ENTRY)
 #undef RTD_TABLE_ENTRY
 };

@@ -15,9 +15,9 @@
 namespace rtd {
 namespace {
 
-#define RTD_DEFINE_RUN(K)                                 \
-    void run##K(const K& kernel, int width, int height) { \
-        parallelFor2D(width, height, kernel);             \
+#define RTD_DEFINE_RUN(K)                                                      \
+    void run##K(const K& kernel, int width, int height, CpuScratch& scratch) { \
+        parallelFor2D(width, height, kernel, &scratch);                        \
     }
 RTD_FOR_EACH_KERNEL(RTD_DEFINE_RUN)
 #undef RTD_DEFINE_RUN

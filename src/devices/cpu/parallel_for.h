@@ -2,9 +2,14 @@
 // row loop so the compiler can vectorise it across neighbouring pixels.
 #pragma once
 
+#include <omp.h>
+
+#include <algorithm>
 #include <concepts>
+#include <cstring>
 
 #include "core/host_device.h"
+#include "devices/cpu/cpu_scratch.h"
 #include "kernels/kernel_list.h"
 
 #if defined(__SSE__)
@@ -158,10 +163,140 @@ void parallelRows(int width, int height, const Kernel& kernel, RowOf rowOf) {
     }
 }
 
+// A kernel with filterSharingPairs (the course's A-Trous level, Atrous) evaluates each pair of
+// pixels once for both: a row stores, for its taps in the rows below, the weights it has as their
+// tap, which those rows then load. Each core runs its block of the visited rows in runs (a run:
+// rows `step` apart, step 1 in plain order, the stride in classes of equal y mod stride) and keeps
+// the stored weights of the last 2 stride / step rows in a ring of rows of its scratch. The rows
+// above a run's first are run first for their stored weights only (zero above the image).
 template <class Kernel>
-void parallelFor2D(int width, int height, const Kernel& kernel) {
+concept SharesPairs = requires(const Kernel& k, const PartnerWeightRows& rows) {
+    k.template filterSharingPairs<true>(0, 0, rows);
+    k.template filterSharingPairs<false>(0, 0, rows);
+};
+
+// The ring's shape for one level: 2 stride / step + 1 rows, each kForwardTaps planes of the
+// width plus a margin of 2 strides (the taps above reach that far out), rounded to whole cache
+// lines. The margins stay 0: taps in the border weigh nothing.
+struct PartnerRing {
+    int rows = 0;
+    int margin = 0;
+    long planeStride = 0;
+    PartnerRing(int stride, int step, int width)
+        : rows(2 * stride / step + 1),
+          margin((2 * stride + 15) / 16 * 16),
+          planeStride(width + 2L * margin) {}
+    std::size_t floatsPerRow() const { return std::size_t(kForwardTaps) * planeStride; }
+    std::size_t floatsPerCore() const { return std::size_t(rows) * floatsPerRow(); }
+};
+
+// Whether a SharesPairs kernel visits its rows in classes of equal y mod stride: as
+// interleaveRows, but counting the plain order's ring too, and against 3/4 of L2 (the output
+// rows share it). At 512x512 the course's stride 16 then runs interleaved (its level 12 % faster
+// so in alternating runs; in plain order its ring of 33 rows holds 0.76 MB besides 1.2 MB of
+// tap rows); at 1920x1080, strides 4 to 16 (stride 4 as fast either way).
+inline bool visitsInterleaved(int stride, int width, int height) {
+    if (stride <= 1 || stride >= height) return false;
+    long tapRows = 4L * stride * width * long(sizeof(float)) * kPlanesPerTap;
+    long ring = long(PartnerRing(stride, 1, width).floatsPerCore() * sizeof(float));
+    return tapRows + ring > kL2CacheBytes / 4 * 3;
+}
+
+template <bool WithResult, class Kernel>
+RTD_INLINE void runSharingRow(const Kernel& kernel, int width, int y,
+                              const PartnerWeightRows& rows) {
+    RTD_CPU_SIMD
+    for (int x = 0; x < width; ++x) kernel.template filterSharingPairs<WithResult>(x, y, rows);
+}
+
+template <class Kernel, class RowOf>
+void parallelRowsSharingPairs(int width, int height, const Kernel& kernel, RowOf rowOf, int step,
+                              float* scratch) {
+    const int stride = kernel.tapRowStride();
+    const PartnerRing ring(stride, step, width);
+    const int above = 2 * stride / step;  // rows run before a run's first, for their weights
+#pragma omp parallel
+    {
+        flushDenormalsToZero();
+        const Kernel local = kernel;  // a private copy, as in parallelRows
+        const int core = omp_get_thread_num(), cores = omp_get_num_threads();
+        float* const mine = scratch + std::size_t(core) * ring.floatsPerCore();
+        // The ring row of a run's m-th row (m < 0: the rows above it), at column 0.
+        auto ringRow = [&](int m) {
+            int slot = ((m % ring.rows) + ring.rows) % ring.rows;
+            return mine + std::size_t(slot) * ring.floatsPerRow() + ring.margin;
+        };
+        for (int r = 0; r < ring.rows; ++r) {
+            for (int k = 0; k < kForwardTaps; ++k) {
+                float* plane = ringRow(r) + k * ring.planeStride;
+                std::fill(plane - ring.margin, plane, 0.0f);
+                std::fill(plane + width, plane + width + ring.margin, 0.0f);
+            }
+        }
+        // One contiguous block of the visited rows per core, as parallelRows' static schedule.
+        // In plain order each core but the first also runs `above` rows for their weights only
+        // (about half a row's work each), so those cores take that many half rows fewer.
+        // (At most height / 2 cores of them: the blocks stay in order and within the image.)
+        const double extra = step == 1 ? std::min(0.5 * above, height / (2.0 * cores)) : 0.0;
+        const double share = (height + (cores - 1) * extra) / cores;
+        auto blockStart = [&](int c) {
+            return c == 0 ? 0 : c == cores ? height : int(c * share - (c - 1) * extra + 0.5);
+        };
+        const int k0 = blockStart(core), k1 = blockStart(core + 1);
+        for (int k = k0; k < k1;) {
+            const int yStart = rowOf(k);
+            int count = 1;
+            while (k + count < k1 && rowOf(k + count) == yStart + count * step) ++count;
+            for (int m = -above; m < 0; ++m) {
+                const int y = yStart + m * step;
+                float* own = ringRow(m);
+                if (y < 0) {
+                    for (int t = 0; t < kForwardTaps; ++t)
+                        std::fill(own + t * ring.planeStride, own + t * ring.planeStride + width,
+                                  0.0f);
+                } else {
+                    runSharingRow<false>(local, width, y,
+                                         {own, nullptr, nullptr, ring.planeStride});
+                }
+            }
+            for (int m = 0; m < count; ++m)
+                runSharingRow<true>(local, width, yStart + m * step,
+                                    {ringRow(m), ringRow(m - stride / step),
+                                     ringRow(m - 2 * stride / step), ring.planeStride});
+            k += count;
+        }
+    }
+}
+
+// What a SharesPairs kernel needs of the scratch: the ring of every core at the widest
+// stride any level can have (padding / 2), so that one allocation serves every level.
+inline std::size_t sharingScratchFloats(int width, int height, int padding) {
+    std::size_t most = 0;
+    for (int stride = 1; 2 * stride <= padding; stride *= 2) {
+        int step = visitsInterleaved(stride, width, height) ? stride : 1;
+        most = std::max(most, PartnerRing(stride, step, width).floatsPerCore());
+    }
+    return most * std::size_t(omp_get_max_threads());
+}
+
+// scratch: the device's, for the kernels that need it (SharesPairs); without it they run in
+// their per-pixel form.
+template <class Kernel>
+void parallelFor2D(int width, int height, const Kernel& kernel, CpuScratch* scratch = nullptr) {
     if constexpr (kHasTapRowStride<Kernel>) {
         int stride = kernel.tapRowStride();
+        if constexpr (SharesPairs<Kernel>) {
+            if (scratch) {
+                float* memory =
+                    scratch->floats(sharingScratchFloats(width, height, kernel.g.layout.padding));
+                if (visitsInterleaved(stride, width, height))
+                    return parallelRowsSharingPairs(
+                        width, height, kernel,
+                        [=](int k) { return interleavedRow(k, height, stride); }, stride, memory);
+                return parallelRowsSharingPairs(
+                    width, height, kernel, [](int k) { return k; }, 1, memory);
+            }
+        }
         if (stride > 1 && stride < height && interleaveRows(stride, width))
             return parallelRows(width, height, kernel,
                                 [=](int k) { return interleavedRow(k, height, stride); });
