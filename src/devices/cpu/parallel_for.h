@@ -202,6 +202,19 @@ inline bool visitsInterleaved(int stride, int width, int height) {
     return tapRows + ring > kL2CacheBytes / 4 * 3;
 }
 
+// Where core c's block of the visited rows starts (c = cores: the end), one contiguous block per
+// core as in parallelRows' static schedule. In plain order (step 1) each core but the first also
+// runs `above` rows for their weights only, about half a row's work each, so those cores take
+// that many half rows fewer (at most height / 2 cores of them: the blocks stay in order and
+// within the image).
+inline int sharingBlockStart(int c, int cores, int height, int above, int step) {
+    if (c <= 0) return 0;
+    if (c >= cores) return height;
+    const double extra = step == 1 ? std::min(0.5 * above, height / (2.0 * cores)) : 0.0;
+    const double share = (height + (cores - 1) * extra) / cores;
+    return int(c * share - (c - 1) * extra + 0.5);
+}
+
 template <bool WithResult, class Kernel>
 RTD_INLINE void runSharingRow(const Kernel& kernel, int width, int y,
                               const PartnerWeightRows& rows) {
@@ -233,16 +246,8 @@ void parallelRowsSharingPairs(int width, int height, const Kernel& kernel, RowOf
                 std::fill(plane + width, plane + width + ring.margin, 0.0f);
             }
         }
-        // One contiguous block of the visited rows per core, as parallelRows' static schedule.
-        // In plain order each core but the first also runs `above` rows for their weights only
-        // (about half a row's work each), so those cores take that many half rows fewer.
-        // (At most height / 2 cores of them: the blocks stay in order and within the image.)
-        const double extra = step == 1 ? std::min(0.5 * above, height / (2.0 * cores)) : 0.0;
-        const double share = (height + (cores - 1) * extra) / cores;
-        auto blockStart = [&](int c) {
-            return c == 0 ? 0 : c == cores ? height : int(c * share - (c - 1) * extra + 0.5);
-        };
-        const int k0 = blockStart(core), k1 = blockStart(core + 1);
+        const int k0 = sharingBlockStart(core, cores, height, above, step),
+                  k1 = sharingBlockStart(core + 1, cores, height, above, step);
         for (int k = k0; k < k1;) {
             const int yStart = rowOf(k);
             int count = 1;
