@@ -38,8 +38,10 @@ struct Atrous {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { filter<0>(x, y); }
 
-    // Branch-free body (border and background taps get weight 0) so the CPU launcher can
-    // vectorise across neighbouring pixels: their taps are neighbours too (contiguous loads).
+    // The per-pixel form: the reference the other forms are tested against, and the GPU's for a
+    // pixel without a partner row (the CPU's device runs filterSharingPairs). Branch-free
+    // (border and background taps get weight 0), so a CPU loop over a row vectorises it: the
+    // pixels' taps are neighbours too (contiguous loads).
     // FixedStride > 0: the stride as a compile-time constant (the CUDA launcher's choice for
     // some strides): the taps' column offsets then become immediate operands of the GPU's loads.
     template <int FixedStride>
