@@ -252,6 +252,7 @@ struct Denoiser::Impl {
                             (settings.method == Method::Temporal &&
                              settings.temporal.spatialFilter == SpatialFilter::Atrous);
         bool assignmentTemporal = settings.method == Method::Temporal;
+        if (atrousLevels) d.reserveAtrousWorkspace(layout);
         for (auto* b : {&noisy, &position, &albedo}) *b = planesBuffer(3);
         for (int k = 0; k < 2; ++k) {
             if (interleavedGuide) {

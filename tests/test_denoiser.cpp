@@ -58,6 +58,27 @@ TEST(Denoiser, ConstantImageIsUnchangedByEveryMethod) {
         }
 }
 
+// Everything a denoiser holds on its device is allocated by the first frame: later frames of the
+// same size allocate nothing (the CPU's A-Trous scratch included).
+TEST(Denoiser, LaterFramesAllocateNothing) {
+    SceneDescription d;
+    d.width = 40;
+    d.height = 24;
+    Frame frame = makeFrame(d);
+    for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf})
+        for (SpatialFilter filter : {SpatialFilter::Jbf, SpatialFilter::Atrous}) {
+            Denoiser denoiser(settingsFor(method, filter));
+            denoiser.processFrame(frame);
+            const std::size_t first = denoiser.deviceMemoryBytes();
+            EXPECT_GT(first, 0u);
+            for (int i = 0; i < 2; ++i) {
+                denoiser.processFrame(frame);
+                EXPECT_EQ(denoiser.deviceMemoryBytes(), first)
+                    << toString(method) << "/" << toString(filter) << " frame " << i + 2;
+            }
+        }
+}
+
 // Left and right halves differ in colour and in exactly one other way; the filtered left half
 // must not pick up the right half's colour.
 void expectEdgeKept(const SceneDescription& d, const char* what) {

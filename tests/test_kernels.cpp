@@ -375,6 +375,22 @@ TEST(CpuLauncher, SharingBlocksCoverTheRowsInOrderAndBalanceTheRowsAbove) {
     EXPECT_EQ(sharingBlockStart(1, 2, 512, 16, 8), 256);  // interleaved: two rows above at most
 }
 
+// The device reserves the levels' scratch with the denoiser's buffers: the levels themselves,
+// at every stride the padding allows, then allocate nothing.
+TEST(CpuLauncher, AtrousLevelsAllocateNothingOnceTheWorkspaceIsReserved) {
+    Harness h(37, 45, 32);
+    const std::size_t buffers = h.device->allocatedBytes();
+    h.device->reserveAtrousWorkspace(h.layout);
+    const std::size_t reserved = h.device->allocatedBytes();
+    EXPECT_GE(reserved - buffers, sharingScratchFloats(37, 45, h.layout.padding) * sizeof(float));
+    const EdgeStoppingTerms terms{1.0f, 50.0f, 50.0f};
+    for (int stride : {1, 2, 4, 8, 16}) {
+        h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms}, 37,
+                         45);
+        EXPECT_EQ(h.device->allocatedBytes(), reserved) << "stride " << stride;
+    }
+}
+
 TEST(Accumulate, ClampsHistoryToMeanPlusMinusKSigmaThenBlends) {
     // 3x3 image, radius 1: the centre's neighbourhood is the whole image. The window is read
     // at its compile-time width (masked taps), so the border is that wide.

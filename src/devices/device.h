@@ -36,6 +36,11 @@ class Device {
     // accumulation, ReprojectAccumulate.)
     virtual bool prefersFusedPasses() const { return false; }
 
+    // Working memory the course's A-Trous levels need besides their buffers on this device (the
+    // CPU's rows of pair weights, CpuScratch), for frames of `layout` and levels up to stride
+    // layout.padding / 2: reserved with the denoiser's buffers, so that no pass allocates.
+    virtual void reserveAtrousWorkspace(const Layout& layout) { (void)layout; }
+
     virtual void* allocate(std::size_t bytes) = 0;
     virtual void release(void* pointer) noexcept = 0;
     virtual void copyToDevice(void* deviceDst, const void* hostSrc, std::size_t bytes) = 0;

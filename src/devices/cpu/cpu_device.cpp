@@ -8,6 +8,7 @@
 
 #include "devices/cpu/cpu_kernels.h"
 #include "devices/cpu/cpu_scratch.h"
+#include "devices/cpu/parallel_for.h"
 #include "devices/device.h"
 #include "rtdenoise/error.h"
 
@@ -42,6 +43,9 @@ class CpuDevice final : public Device {
                toString(kernels_.isa) + ")";
     }
     bool sharesHostMemory() const override { return true; }
+    void reserveAtrousWorkspace(const Layout& layout) override {
+        scratch_.floats(sharingScratchFloats(layout.width, layout.height, layout.padding));
+    }
 
     void* allocate(std::size_t bytes) override {
         // 64-byte alignment: whole cache lines, aligned vector loads.

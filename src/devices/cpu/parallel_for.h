@@ -22,7 +22,7 @@ namespace {
 
 // Flush denormals to zero in this thread: filter weights far below 1e-38 times a colour would
 // otherwise take the processor's slow denormal path (several times slower per operation).
-void flushDenormalsToZero() {
+inline void flushDenormalsToZero() {
 #if defined(__SSE__)
     _mm_setcsr(_mm_getcsr() | 0x8040);  // FTZ | DAZ
 #endif
@@ -274,7 +274,8 @@ void parallelRowsSharingPairs(int width, int height, const Kernel& kernel, RowOf
 }
 
 // What a SharesPairs kernel needs of the scratch: the ring of every core at the widest
-// stride any level can have (padding / 2), so that one allocation serves every level.
+// stride any level can have (padding / 2), so that one allocation serves every level (the
+// device reserves it with the denoiser's buffers: reserveAtrousWorkspace).
 inline std::size_t sharingScratchFloats(int width, int height, int padding) {
     std::size_t most = 0;
     for (int stride = 1; 2 * stride <= padding; stride *= 2) {
