@@ -375,6 +375,37 @@ TEST(CpuLauncher, SharingBlocksCoverTheRowsInOrderAndBalanceTheRowsAbove) {
     EXPECT_EQ(sharingBlockStart(1, 2, 512, 16, 8), 256);  // interleaved: two rows above at most
 }
 
+// The same on images smaller than the taps' reach (a row, a column, a pixel), where most taps and
+// most rows above a core's first lie in the border.
+TEST(Atrous, PairsSharedBetweenRowsGiveThePerPixelResultOnTinyImages) {
+    const EdgeStoppingTerms terms{1.0f / (2.0f * 0.6f * 0.6f), 1.0f / (2.0f * 0.5f * 0.5f),
+                                  1.0f / (2.0f * 0.3f * 0.3f)};
+    for (auto [w, hgt] : {std::pair{1, 1}, {3, 2}, {16, 1}, {1, 9}, {5, 33}}) {
+        Harness h(w, hgt, 32);
+        UnitRandom next{41u};
+        for (int y = 0; y < hgt; ++y)
+            for (int x = 0; x < w; ++x) {
+                auto i = h.layout.index(x, y);
+                h.planes(h.normal).store(
+                    i, normalize(make3(0.6f * (next() - 0.5f), 0.6f * (next() - 0.5f), -1.0f)));
+                h.planes(h.a).store(i, make3(next(), next(), next()));
+            }
+        for (int stride : {1, 2, 4, 8, 16}) {
+            parallelFor2D(w, hgt,
+                          AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms});
+            h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.c), stride, terms},
+                             w, hgt);
+            for (int y = 0; y < hgt; ++y)
+                for (int x = 0; x < w; ++x) {
+                    Float3 want = h.planes(h.b).load(h.layout.index(x, y));
+                    Float3 got = h.planes(h.c).load(h.layout.index(x, y));
+                    ASSERT_NEAR(got.y, want.y, 1e-5f * std::fabs(want.y) + 1e-7f)
+                        << w << "x" << hgt << " at " << x << ", " << y << " stride " << stride;
+                }
+        }
+    }
+}
+
 // The device reserves the levels' scratch with the denoiser's buffers: the levels themselves,
 // at every stride the padding allows, then allocate nothing.
 TEST(CpuLauncher, AtrousLevelsAllocateNothingOnceTheWorkspaceIsReserved) {
