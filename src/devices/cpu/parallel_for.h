@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <concepts>
-#include <cstring>
 
 #include "core/host_device.h"
 #include "devices/cpu/cpu_scratch.h"
