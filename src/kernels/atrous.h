@@ -151,7 +151,10 @@ struct Atrous {
         const PixelIndex i = L.index(x, y);
         const Float3 ci = in.load(i), ni = g.normal.load(i);
         const EdgeStoppingTerms terms = base2(edges);
-        const EdgeStoppingCentre centre = edgeStoppingCentre(terms, ci, ni, g.position.load(i));
+        const Float3 pi = g.position.load(i);
+        // For the taps below, the plane term's normal unscaled, as the taps' own: both directions
+        // then take the scale with their shared reciprocal (and no scaled copy stays live).
+        const EdgeStoppingCentre unscaled{ci, ni, pi, ni};
         const std::int32_t keyI = g.filterKey[i];
         Float3 sum = {};
         float sumW = 0.0f;
@@ -161,28 +164,27 @@ struct Atrous {
             const PixelIndex ja = i + forwardOffset(k), jb = i + forwardOffset(k + 1);
             const Float3 ca = in.load(ja), cb = in.load(jb);
             EdgeStoppingPairParts a = edgeStoppingPairParts<OppositeNormalsVanish>(
-                terms, centre, ca, g.normal.load(ja), g.position.load(ja),
+                terms, unscaled, ca, g.normal.load(ja), g.position.load(ja),
                 log2B3(forwardDx(k), forwardDy(k)));
             EdgeStoppingPairParts b = edgeStoppingPairParts<OppositeNormalsVanish>(
-                terms, centre, cb, g.normal.load(jb), g.position.load(jb),
+                terms, unscaled, cb, g.normal.load(jb), g.position.load(jb),
                 log2B3(forwardDx(k + 1), forwardDy(k + 1)));
             const float inverseProduct =
                 divideApprox(1.0f, a.centre.planeDenominator * b.centre.planeDenominator);
-            const float reciprocalA = b.centre.planeDenominator * inverseProduct;
-            const float reciprocalB = a.centre.planeDenominator * inverseProduct;
+            // 1 / (2 sp^2 |dp|^2) for each.
+            const float scaleA = b.centre.planeDenominator * inverseProduct * terms.planeScale;
+            const float scaleB = a.centre.planeDenominator * inverseProduct * terms.planeScale;
             const bool sameA = g.filterKey[ja] == keyI, sameB = g.filterKey[jb] == keyI;
-            // As the taps' centres: their normals are not prescaled, their reciprocal is.
-            float partnerA = exp2Negative(
-                -(a.centre.colorAndNormal + a.tapNumerator * (reciprocalA * terms.planeScale)));
-            float partnerB = exp2Negative(
-                -(b.centre.colorAndNormal + b.tapNumerator * (reciprocalB * terms.planeScale)));
+            // As the taps' centres.
+            float partnerA = exp2Negative(-(a.centre.colorAndNormal + a.tapNumerator * scaleA));
+            float partnerB = exp2Negative(-(b.centre.colorAndNormal + b.tapNumerator * scaleB));
             rows.own[k * rows.planeStride + x] = sameA ? partnerA : 0.0f;
             rows.own[(k + 1) * rows.planeStride + x] = sameB ? partnerB : 0.0f;
             if constexpr (WithResult) {
-                float wa = exp2Negative(
-                    -(a.centre.colorAndNormal + a.centre.planeNumerator * reciprocalA));
-                float wb = exp2Negative(
-                    -(b.centre.colorAndNormal + b.centre.planeNumerator * reciprocalB));
+                float wa =
+                    exp2Negative(-(a.centre.colorAndNormal + a.centre.planeNumerator * scaleA));
+                float wb =
+                    exp2Negative(-(b.centre.colorAndNormal + b.centre.planeNumerator * scaleB));
                 wa = sameA ? wa : 0.0f;
                 wb = sameB ? wb : 0.0f;
                 sum += ca * wa + cb * wb;
@@ -191,6 +193,7 @@ struct Atrous {
         }
         if constexpr (WithResult) {
             // The taps in this row, at +/- 1 and 2 strides, both ways (as filter's pairs).
+            const EdgeStoppingCentre centre = edgeStoppingCentre(terms, ci, ni, pi);
             RTD_UNROLL
             for (int dx = 1; dx <= 2; ++dx) {
                 const PixelIndex o = L.offset(dx * step, 0), ja = i + o, jb = i - o;
