@@ -406,16 +406,25 @@ TEST(Atrous, PairsSharedBetweenRowsGiveThePerPixelResultOnTinyImages) {
     }
 }
 
+// The scratch is that of the widest stride that shares pairs: strides of the image's height or
+// more run per pixel (10 levels at 512x512: the ring of stride 512 would hold 1025 rows).
+TEST(CpuLauncher, SharingScratchIgnoresStridesOfTheImageHeightOrMore) {
+    EXPECT_EQ(sharingScratchFloats(512, 512, 1024), sharingScratchFloats(512, 512, 32));
+    EXPECT_LT(sharingScratchFloats(512, 512, 1024) * sizeof(float),
+              std::size_t(omp_get_max_threads()) << 20);  // under 1 MiB per core
+    EXPECT_EQ(sharingScratchFloats(37, 1, 64), 0u);       // one row: nothing to share
+}
+
 // The device reserves the levels' scratch with the denoiser's buffers: the levels themselves,
 // at every stride the padding allows, then allocate nothing.
 TEST(CpuLauncher, AtrousLevelsAllocateNothingOnceTheWorkspaceIsReserved) {
-    Harness h(37, 45, 32);
+    Harness h(37, 45, 64);
     const std::size_t buffers = h.device->allocatedBytes();
     h.device->reserveAtrousWorkspace(h.layout);
     const std::size_t reserved = h.device->allocatedBytes();
     EXPECT_GE(reserved - buffers, sharingScratchFloats(37, 45, h.layout.padding) * sizeof(float));
     const EdgeStoppingTerms terms{1.0f, 50.0f, 50.0f};
-    for (int stride : {1, 2, 4, 8, 16}) {
+    for (int stride : {1, 2, 4, 8, 16, 32}) {  // 32: the image's height or more, per pixel
         h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms}, 37,
                          45);
         EXPECT_EQ(h.device->allocatedBytes(), reserved) << "stride " << stride;

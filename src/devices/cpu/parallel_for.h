@@ -277,7 +277,7 @@ void parallelRowsSharingPairs(int width, int height, const Kernel& kernel, RowOf
 // device reserves it with the denoiser's buffers: reserveAtrousWorkspace).
 inline std::size_t sharingScratchFloats(int width, int height, int padding) {
     std::size_t most = 0;
-    for (int stride = 1; 2 * stride <= padding; stride *= 2) {
+    for (int stride = 1; 2 * stride <= padding && stride < height; stride *= 2) {
         int step = visitsInterleaved(stride, width, height) ? stride : 1;
         most = std::max(most, PartnerRing(stride, step, width).floatsPerCore());
     }
@@ -285,13 +285,15 @@ inline std::size_t sharingScratchFloats(int width, int height, int padding) {
 }
 
 // scratch: the device's, for the kernels that need it (SharesPairs); without it they run in
-// their per-pixel form.
+// their per-pixel form, as they do at strides of the image's height or more (every tap off the
+// centre's row then lies in the border: nothing to share, and the plain order's ring would
+// hold 2 stride + 1 rows, 210 MB for the 10th level at 512x512).
 template <class Kernel>
 void parallelFor2D(int width, int height, const Kernel& kernel, CpuScratch* scratch = nullptr) {
     if constexpr (kHasTapRowStride<Kernel>) {
         int stride = kernel.tapRowStride();
         if constexpr (SharesPairs<Kernel>) {
-            if (scratch) {
+            if (scratch && stride < height) {
                 float* memory =
                     scratch->floats(sharingScratchFloats(width, height, kernel.g.layout.padding));
                 if (visitsInterleaved(stride, width, height))
