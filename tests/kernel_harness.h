@@ -2,6 +2,9 @@
 // kernel-level known-answer tests.
 #pragma once
 
+#include <gtest/gtest.h>
+
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -19,6 +22,21 @@ struct UnitRandom {
         return float(state >> 8) / float(1 << 24);
     }
 };
+
+// How far another form of a kernel (pixel pairs, pairs shared between rows, another layout) may
+// land from the reference form's `value`: it sums the same terms in another order.
+inline float roundingTolerance(float value) {
+    return 1e-5f * std::fabs(value) + 1e-7f;
+}
+// Every channel of `got` within roundingTolerance of `want`'s.
+inline ::testing::AssertionResult nearUpToRounding(Float3 got, Float3 want) {
+    const float g[3] = {got.x, got.y, got.z}, w[3] = {want.x, want.y, want.z};
+    for (int c = 0; c < 3; ++c)
+        if (!(std::fabs(g[c] - w[c]) <= roundingTolerance(w[c])))
+            return ::testing::AssertionFailure()
+                   << "channel " << c << ": " << g[c] << " against " << w[c];
+    return ::testing::AssertionSuccess();
+}
 
 // Runs a kernel's GPU form in pixel pairs (filterPair<Stride>) over a w x h image on the CPU,
 // with the CUDA launcher's mapping (PairedRows): thread row r takes row top = 2 Stride

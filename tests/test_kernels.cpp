@@ -231,14 +231,6 @@ TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
     h.ids.data()[h.layout.index(7, 8)] = h.ids.data()[h.layout.index(7, 9)] = -1;  // stride 1
     const EdgeStoppingTerms terms{1.0f / (2.0f * 0.6f * 0.6f), 1.0f / (2.0f * 0.1f * 0.1f),
                                   1.0f / (2.0f * 0.1f * 0.1f)};
-    auto expectNear = [&](Float3 single, Float3 paired, int x, int y, int stride) {
-        EXPECT_NEAR(paired.x, single.x, 1e-5f * std::fabs(single.x) + 1e-7f)
-            << x << ", " << y << " stride " << stride;
-        EXPECT_NEAR(paired.y, single.y, 1e-5f * std::fabs(single.y) + 1e-7f)
-            << x << ", " << y << " stride " << stride;
-        EXPECT_NEAR(paired.z, single.z, 1e-5f * std::fabs(single.z) + 1e-7f)
-            << x << ", " << y << " stride " << stride;
-    };
     for (int stride : {1, 2, 4}) {
         AtrousNarrowNormalKernel single{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms};
         AtrousNarrowNormalKernel paired{h.gbuffer(), h.planes(h.a), h.planes(h.c), stride, terms};
@@ -246,8 +238,9 @@ TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
         runInPixelPairs(paired, stride, w, hgt);
         for (int y = 0; y < hgt; ++y)
             for (int x = 0; x < w; ++x)
-                expectNear(h.planes(h.b).load(h.layout.index(x, y)),
-                           h.planes(h.c).load(h.layout.index(x, y)), x, y, stride);
+                EXPECT_TRUE(nearUpToRounding(h.planes(h.c).load(h.layout.index(x, y)),
+                                             h.planes(h.b).load(h.layout.index(x, y))))
+                    << x << ", " << y << " stride " << stride;
         // Filtered (not passed through): the result differs from the input.
         EXPECT_NE(h.planes(h.c).load(h.layout.index(10, 6)).x,
                   h.planes(h.a).load(h.layout.index(10, 6)).x);
@@ -263,7 +256,7 @@ TEST(Atrous, PixelPairsGiveTheSingleFilterResult) {
                                           h.planes(albedo), rgbPaired.data()},
                     2, w, hgt);
     for (std::size_t k = 0; k < rgbSingle.size(); ++k)
-        ASSERT_NEAR(rgbPaired[k], rgbSingle[k], 1e-5f * std::fabs(rgbSingle[k]) + 1e-7f) << k;
+        ASSERT_NEAR(rgbPaired[k], rgbSingle[k], roundingTolerance(rgbSingle[k])) << k;
 }
 
 // The CPU's form that evaluates each pair of pixels once for both (filterSharingPairs, its
@@ -304,12 +297,10 @@ TEST(Atrous, PairsSharedBetweenRowsGiveThePerPixelResult) {
                 w, hgt, shared, [](int k) { return k; }, 1, memory);
         for (int y = 0; y < hgt; ++y)
             for (int x = 0; x < w; ++x) {
-                Float3 want = h.planes(h.b).load(h.layout.index(x, y));
-                Float3 got = h.planes(h.c).load(h.layout.index(x, y));
-                for (auto [g, e] : {std::pair{got.x, want.x}, {got.y, want.y}, {got.z, want.z}})
-                    ASSERT_NEAR(g, e, 1e-5f * std::fabs(e) + 1e-7f)
-                        << x << ", " << y << " stride " << stride << " interleaved " << interleaved
-                        << " cores " << cores;
+                ASSERT_TRUE(nearUpToRounding(h.planes(h.c).load(h.layout.index(x, y)),
+                                             h.planes(h.b).load(h.layout.index(x, y))))
+                    << x << ", " << y << " stride " << stride << " interleaved " << interleaved
+                    << " cores " << cores;
             }
     };
     // (Not more cores than the default: libomp keeps memory of a grown team to the end, which
@@ -350,7 +341,7 @@ TEST(Atrous, PairsSharedBetweenRowsGiveThePerPixelResult) {
                                                wide, h.planes(albedo), rgbShared.data()},
                          w, hgt);
         for (std::size_t k = 0; k < rgbPerPixel.size(); ++k)
-            ASSERT_NEAR(rgbShared[k], rgbPerPixel[k], 1e-5f * std::fabs(rgbPerPixel[k]) + 1e-7f)
+            ASSERT_NEAR(rgbShared[k], rgbPerPixel[k], roundingTolerance(rgbPerPixel[k]))
                 << k << " stride " << stride;
     }
 }
@@ -399,7 +390,7 @@ TEST(Atrous, PairsSharedBetweenRowsGiveThePerPixelResultOnTinyImages) {
                 for (int x = 0; x < w; ++x) {
                     Float3 want = h.planes(h.b).load(h.layout.index(x, y));
                     Float3 got = h.planes(h.c).load(h.layout.index(x, y));
-                    ASSERT_NEAR(got.y, want.y, 1e-5f * std::fabs(want.y) + 1e-7f)
+                    ASSERT_NEAR(got.y, want.y, roundingTolerance(want.y))
                         << w << "x" << hgt << " at " << x << ", " << y << " stride " << stride;
                 }
         }

@@ -345,7 +345,7 @@ TEST(SvgfKernels, InterleavedGuideGivesThePlanarKernelsResults) {
                 for (int x = 0; x < w; ++x) {
                     auto i = hs.layout.index(x, y);
                     ASSERT_NEAR(hs.planeSet(a).at(k, i), hs.planeSet(b).at(k, i),
-                                1e-5f * std::fabs(hs.planeSet(a).at(k, i)) + 1e-7f)
+                                roundingTolerance(hs.planeSet(a).at(k, i)))
                         << what << " plane " << k << " at " << x << ", " << y;
                 }
     };
@@ -390,7 +390,7 @@ TEST(SvgfKernels, InterleavedGuideGivesThePlanarKernelsResults) {
                                              rgbPacked.data()},
         w, h);
     for (std::size_t k = 0; k < rgbPlanar.size(); ++k)
-        ASSERT_NEAR(rgbPlanar[k], rgbPacked[k], 1e-5f * std::fabs(rgbPlanar[k]) + 1e-7f) << k;
+        ASSERT_NEAR(rgbPlanar[k], rgbPacked[k], roundingTolerance(rgbPlanar[k])) << k;
     // The short-history variance, revised in place from the same start.
     DeviceBuffer<float> varPlanar = hs.buffer(4), varPacked = hs.buffer(4);
     for (auto* b : {&varPlanar, &varPacked})

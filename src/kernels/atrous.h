@@ -57,44 +57,17 @@ struct Atrous {
         std::int32_t idI = g.objectId[i];
         // Taps whose filter key is the centre's (views.h; a background centre's result is unused).
         const std::int32_t keyI = g.filterKey[i];
-        // The centre: all distances 0 but the normal's (n.n rounds to 1 - a few ulp), weight
-        // 2^log2k exp(-D_normal^2 / 2sn^2).
-        float centreW =
-            exp2Negative(log2B3(0, 0) - normalAngleSquared<OppositeNormalsVanish>(dot(ni, ni)) *
-                                            terms.normalScale);
+        const float centreW = centreWeight(terms, ni);
         Float3 sum = ci * centreW;
         float sumW = centreW;
-        // The other 24 taps as 12 pairs at +offset and -offset, which share their kernel value
-        // and one division for their plane terms.
+        // The other 24 taps as 12 pairs at +offset and -offset.
         RTD_UNROLL
         for (int pair = 0; pair < 12; ++pair) {
             int tx = pair % 5, ty = pair / 5;  // the taps before the centre, raster order
-            PixelIndex o = L.offset((tx - 2) * step, (ty - 2) * step);
-            PixelIndex ja = i + o, jb = i - o;
-            // The kernel value k = 2^log2k enters the exponent: no multiplication.
-            const float log2Kernel = log2B3(tx - 2, ty - 2);
-            Float3 ca = in.load(ja), cb = in.load(jb);
-            EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(
-                terms, centre, ca, g.normal.load(ja), g.position.load(ja), log2Kernel);
-            EdgeStoppingParts b = edgeStoppingParts<OppositeNormalsVanish>(
-                terms, centre, cb, g.normal.load(jb), g.position.load(jb), log2Kernel);
-            float exponentA, exponentB;
-            pairExponents(a, b, exponentA, exponentB);
-            float wa = exp2Negative(-exponentA);
-            float wb = exp2Negative(-exponentB);
-            wa = g.filterKey[ja] == keyI ? wa : 0.0f;
-            wb = g.filterKey[jb] == keyI ? wb : 0.0f;
-            sum += ca * wa + cb * wb;
-            sumW += wa + wb;
+            addOppositeTaps(terms, centre, i, keyI, L.offset((tx - 2) * step, (ty - 2) * step),
+                            log2B3(tx - 2, ty - 2), sum, sumW);
         }
-        // Foreground: sumW is at least about (3/8)^2, the centre tap. Background passes through.
-        float keep = 1.0f - foregroundMask(idI);
-        float scale = (1.0f - keep) / maxf(sumW, 1e-20f);
-        Float3 result = sum * scale + ci * keep;
-        if constexpr (Modulated)
-            storeModulated(L, rgbOut, x, y, result * albedo.load(i));
-        else
-            out.store(i, result);
+        finish(x, y, i, ci, sum, sumW, idI);
     }
 
     // Two pixels of a column a stride apart, (x, y) and (x, y + Stride), y + Stride inside the
@@ -195,22 +168,9 @@ struct Atrous {
             // The taps in this row, at +/- 1 and 2 strides, both ways (as filter's pairs).
             const EdgeStoppingCentre centre = edgeStoppingCentre(terms, ci, ni, pi);
             RTD_UNROLL
-            for (int dx = 1; dx <= 2; ++dx) {
-                const PixelIndex o = L.offset(dx * step, 0), ja = i + o, jb = i - o;
-                const Float3 ca = in.load(ja), cb = in.load(jb);
-                const float log2Kernel = log2B3(dx, 0);
-                EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(
-                    terms, centre, ca, g.normal.load(ja), g.position.load(ja), log2Kernel);
-                EdgeStoppingParts b = edgeStoppingParts<OppositeNormalsVanish>(
-                    terms, centre, cb, g.normal.load(jb), g.position.load(jb), log2Kernel);
-                float exponentA, exponentB;
-                pairExponents(a, b, exponentA, exponentB);
-                float wa = exp2Negative(-exponentA), wb = exp2Negative(-exponentB);
-                wa = g.filterKey[ja] == keyI ? wa : 0.0f;
-                wb = g.filterKey[jb] == keyI ? wb : 0.0f;
-                sum += ca * wa + cb * wb;
-                sumW += wa + wb;
-            }
+            for (int dx = 1; dx <= 2; ++dx)
+                addOppositeTaps(terms, centre, i, keyI, L.offset(dx * step, 0), log2B3(dx, 0), sum,
+                                sumW);
             // The taps above: their weights were stored when their rows ran.
             RTD_UNROLL
             for (int k = 0; k < kForwardTaps; ++k) {
@@ -219,9 +179,7 @@ struct Atrous {
                 sum += in.load(i - forwardOffset(k)) * w;
                 sumW += w;
             }
-            const float centreW =
-                exp2Negative(log2B3(0, 0) - normalAngleSquared<OppositeNormalsVanish>(dot(ni, ni)) *
-                                                terms.normalScale);
+            const float centreW = centreWeight(terms, ni);
             sum += ci * centreW;
             sumW += centreW;
             finish(x, y, i, ci, sum, sumW, g.objectId[i]);
@@ -229,6 +187,36 @@ struct Atrous {
     }
 
   private:
+    // The centre tap's weight: all distances 0 but the normal's (n.n rounds to 1 - a few ulp),
+    // 2^log2k exp(-D_normal^2 / 2sn^2).
+    RTD_HOST_DEVICE RTD_INLINE static float centreWeight(const EdgeStoppingTerms& terms,
+                                                         Float3 normal) {
+        return exp2Negative(log2B3(0, 0) -
+                            normalAngleSquared<OppositeNormalsVanish>(dot(normal, normal)) *
+                                terms.normalScale);
+    }
+    // The taps at +o and -o of centre i (those whose filter key is keyI mix in) added to its
+    // sums: they share their kernel value, 2^log2Kernel inside the exponent (no multiplication),
+    // and one division for their plane terms (pairExponents).
+    RTD_HOST_DEVICE RTD_INLINE void addOppositeTaps(const EdgeStoppingTerms& terms,
+                                                    const EdgeStoppingCentre& centre, PixelIndex i,
+                                                    std::int32_t keyI, PixelIndex o,
+                                                    float log2Kernel, Float3& sum,
+                                                    float& sumW) const {
+        const PixelIndex ja = i + o, jb = i - o;
+        const Float3 ca = in.load(ja), cb = in.load(jb);
+        EdgeStoppingParts a = edgeStoppingParts<OppositeNormalsVanish>(
+            terms, centre, ca, g.normal.load(ja), g.position.load(ja), log2Kernel);
+        EdgeStoppingParts b = edgeStoppingParts<OppositeNormalsVanish>(
+            terms, centre, cb, g.normal.load(jb), g.position.load(jb), log2Kernel);
+        float exponentA, exponentB;
+        pairExponents(a, b, exponentA, exponentB);
+        float wa = exp2Negative(-exponentA), wb = exp2Negative(-exponentB);
+        wa = g.filterKey[ja] == keyI ? wa : 0.0f;
+        wb = g.filterKey[jb] == keyI ? wb : 0.0f;
+        sum += ca * wa + cb * wb;
+        sumW += wa + wb;
+    }
     // filterSharingPairs' taps below the centre, k in [0, kForwardTaps).
     RTD_HOST_DEVICE static constexpr int forwardDx(int k) { return k % 5 - 2; }
     RTD_HOST_DEVICE static constexpr int forwardDy(int k) { return k / 5 + 1; }
@@ -252,9 +240,7 @@ struct Atrous {
     };
     // The centre tap alone (as in filter).
     RTD_HOST_DEVICE RTD_INLINE Sums centreSums(const EdgeStoppingTerms& terms, const Tap& c) const {
-        float w = exp2Negative(log2B3(0, 0) -
-                               normalAngleSquared<OppositeNormalsVanish>(dot(c.normal, c.normal)) *
-                                   terms.normalScale);
+        const float w = centreWeight(terms, c.normal);
         return {edgeStoppingCentre(terms, c.color, c.normal, c.position), c.key, c.color * w, w};
     }
     // Tap ta for centre a and tap tb for centre b, with one division between them.
@@ -275,7 +261,8 @@ struct Atrous {
         b.sum += tb.color * wb;
         b.sumW += wb;
     }
-    // As filter ends: background passes through.
+    // The result from the sums (foreground: sumW is at least about (3/8)^2, the centre tap's);
+    // background passes through.
     RTD_HOST_DEVICE RTD_INLINE void finish(int x, int y, PixelIndex i, Float3 ci, Float3 sum,
                                            float sumW, std::int32_t id) const {
         float keep = 1.0f - foregroundMask(id);
