@@ -116,6 +116,8 @@ struct Denoiser::Impl {
     // this frame's and the last (in place of the normal and depth planes)
     DeviceBuffer<float> normalDepth[2];
     bool interleavedGuide = false;
+    // SVGF's history-clamp row sums come from the firefly removal's tile pass (OutlierTile).
+    bool clampRowsInTile = false;
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
@@ -495,7 +497,7 @@ struct Denoiser::Impl {
         const bool sigma128 = hasPaperSigmaNormal(terms) && !device->hasFastLogarithm();
         padding = std::max({padding, kSvgfWindowRadius, 2 << (sv.iterations - 1)});
         addGeometryPass();
-        if (sv.historyClampK > 0.0f) {
+        if (sv.historyClampK > 0.0f && !clampRowsInTile) {
             addPass("svgf-clamp-rows", {inName, "objectId"}, {"windowSums"}, [this, in] {
                 launch(ColorRowSumsKernel{gbuffer(), planes(*in), sums(), kSvgfWindowRadius});
             });
@@ -587,6 +589,28 @@ struct Denoiser::Impl {
         }
     }
 
+    // The firefly removal as one tile pass (Device::runsTilePasses), with SVGF's history-clamp
+    // row sums where SVGF clamps its history (svgf-clamp-rows is then not added).
+    void addOutlierTilePass(int radius, float k) {
+        clampRowsInTile = settings.method == Method::Svgf && settings.svgf.historyClampK > 0.0f;
+        if (clampRowsInTile) {
+            static_assert(
+                OutlierClampTileKernel::kPhases == 4 &&
+                    std::is_same_v<OutlierClampTileKernel, OutlierTile<kSvgfWindowRadius>>,
+                "the tile's clamp window is SVGF's");
+            addPass("outlier+clamp-rows", {"noisy", "objectId"}, {"despeckled", "windowSums"},
+                    [this, radius, k] {
+                        launch(OutlierClampTileKernel{gbuffer(), planes(noisy), planes(despeckled),
+                                                      sums(), radius, k});
+                    });
+        } else {
+            addPass("outlier", {"noisy", "objectId"}, {"despeckled"}, [this, radius, k] {
+                launch(
+                    OutlierTileKernel{gbuffer(), planes(noisy), planes(despeckled), {}, radius, k});
+            });
+        }
+    }
+
     void buildPipeline() {
         padding = std::max(settings.outlier.enabled ? settings.outlier.radius : 0,
                            settings.method == Method::Temporal ? settings.temporal.clampRadius : 0);
@@ -603,14 +627,22 @@ struct Denoiser::Impl {
             int radius = settings.outlier.radius;
             float k = settings.outlier.k;
             padding = std::max(padding, windowReach(radius));
-            addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
-                launchWindowed<LuminanceRowSums>(radius, gbuffer(), planes(noisy), sums(), radius);
-            });
-            addPass("outlier", {"noisy", "windowSums", "objectId"}, {"despeckled"},
-                    [this, radius, k] {
-                        launchWindowed<Outlier>(radius, gbuffer(), sums(), planes(noisy),
-                                                planes(despeckled), radius, k);
-                    });
+            const bool tiles =
+                settings.tilePasses == TilePasses::On ||
+                (settings.tilePasses == TilePasses::Auto && device->runsTilePasses());
+            if (tiles && radius <= kNarrowWindow) {
+                addOutlierTilePass(radius, k);
+            } else {
+                addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
+                    launchWindowed<LuminanceRowSums>(radius, gbuffer(), planes(noisy), sums(),
+                                                     radius);
+                });
+                addPass("outlier", {"noisy", "windowSums", "objectId"}, {"despeckled"},
+                        [this, radius, k] {
+                            launchWindowed<Outlier>(radius, gbuffer(), sums(), planes(noisy),
+                                                    planes(despeckled), radius, k);
+                        });
+            }
             in = &despeckled;
             inName = "despeckled";
         }

@@ -84,6 +84,18 @@ const char* toString(CpuIsa isa) {
     return "?";
 }
 
+const char* toString(TilePasses tilePasses) {
+    switch (tilePasses) {
+        case TilePasses::Auto:
+            return "auto";
+        case TilePasses::On:
+            return "on";
+        case TilePasses::Off:
+            return "off";
+    }
+    return "?";
+}
+
 const char* toString(DeviceType device) {
     switch (device) {
         case DeviceType::Cpu:

@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "devices/device.h"
@@ -59,6 +61,27 @@ void runInPixelPairs(const Kernel& kernel, int stride, int w, int h) {
     stride == 1   ? run.template operator()<1>()
     : stride == 2 ? run.template operator()<2>()
                   : run.template operator()<4>();
+}
+
+// Runs a tile kernel over a w x h image on the CPU as the CUDA launcher does (runTileKernel):
+// per tile and phase, the items of each of `threads` threads (runPhaseItems), the threads taken
+// last to first. Shared starts each tile as NaN: an item that read an entry no earlier phase
+// wrote (or another item of its own phase, not yet run) would spread a NaN or a wrong value.
+template <class Kernel>
+void runTilesAsBlocks(const Kernel& kernel, int w, int h, int threads = 256) {
+    auto shared = std::make_unique<typename Kernel::Shared>();
+    for (int tileY = 0; tileY < h; tileY += Kernel::kTileHeight)
+        for (int tileX = 0; tileX < w; tileX += Kernel::kTileWidth) {
+            std::memset(static_cast<void*>(shared.get()), 0xff, sizeof(typename Kernel::Shared));
+            [&]<int... Phase>(std::integer_sequence<int, Phase...>) {
+                auto phase = [&]<int P>() {
+                    for (int t = threads - 1; t >= 0; --t)
+                        runPhaseItems<P>(kernel, *shared, tileX, tileY, t, threads);
+                };
+                (phase.template operator()<Phase>(), ...);
+            }
+            (std::make_integer_sequence<int, Kernel::kPhases>{});
+        }
 }
 
 // Padded planar buffers for a w x h image, as the Denoiser lays them out.

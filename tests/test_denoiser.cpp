@@ -1,6 +1,7 @@
 // The Denoiser through its public API, on synthetic frames with known answers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "test_support.h"
@@ -452,6 +453,37 @@ TEST(Denoiser, PassesAreListedWithTheirBuffers) {
     // The accumulation writes the history and, modulated, the output.
     EXPECT_EQ(temporal.passes()[11].outputs, (std::vector<std::string>{"history", "output"}));
     EXPECT_EQ(temporal.passes()[10].outputs, (std::vector<std::string>{"reprojected", "validity"}));
+}
+
+// The firefly removal as one tile pass gives the separate passes' frames (every method, over
+// frames where history builds up), and replaces their passes in the list: SVGF's history-clamp
+// row sums come from it too.
+TEST(Denoiser, TilePassesGiveTheSeparatePassesResult) {
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 70, 45, 3);
+    for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf}) {
+        DenoiserSettings s = settingsFor(method);
+        s.tilePasses = TilePasses::Off;
+        Denoiser separate(s);
+        s.tilePasses = TilePasses::On;
+        Denoiser tiled(s);
+        std::vector<std::string> names;
+        for (const PassInfo& p : tiled.passes()) names.push_back(p.name);
+        const bool svgf = method == Method::Svgf;
+        EXPECT_EQ(names[1], svgf ? "outlier+clamp-rows" : "outlier") << toString(method);
+        EXPECT_EQ(std::count(names.begin(), names.end(), "outlier-rows"), 0);
+        EXPECT_EQ(std::count(names.begin(), names.end(), "svgf-clamp-rows"), 0);
+        EXPECT_EQ(separate.passes().size(), tiled.passes().size() + (svgf ? 2 : 1));
+        for (std::size_t i = 0; i < frames.size(); ++i) {
+            Image a = separate.processFrame(frames[i]), b = tiled.processFrame(frames[i]);
+            EXPECT_LE(test::maxRelativeDifference(a, b), 1e-5)
+                << toString(method) << ", frame " << i;
+        }
+    }
+    // A window wider than the tile's runs as separate passes.
+    DenoiserSettings s = settingsFor(Method::Svgf);
+    s.tilePasses = TilePasses::On;
+    s.outlier.radius = 4;
+    EXPECT_EQ(Denoiser(s).passes()[1].name, "outlier-rows");
 }
 
 }  // namespace

@@ -28,15 +28,18 @@ std::string cudaUnavailableReason() {
     }
 }
 
+// gpuTilePasses: the CUDA denoiser's (the CPU's runs its default).
 void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what,
                          std::initializer_list<Method> methods = {Method::Jbf, Method::Atrous,
-                                                                  Method::Temporal, Method::Svgf}) {
+                                                                  Method::Temporal, Method::Svgf},
+                         TilePasses gpuTilePasses = TilePasses::Auto) {
     for (Method method : methods) {
         DenoiserSettings s;
         s.method = method;
         s.device = DeviceType::Cpu;
         Denoiser cpu(s);
         s.device = DeviceType::Cuda;
+        s.tilePasses = gpuTilePasses;
         Denoiser gpu(s);
         for (std::size_t i = 0; i < frames.size(); ++i) {
             Image a = cpu.processFrame(frames[i]), b = gpu.processFrame(frames[i]);
@@ -51,6 +54,18 @@ TEST(Gpu, CpuAndCudaAgreeOnARenderedScene) {
     if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
     std::vector<Frame> frames = test::renderSmallSequence("moving-objects");
     expectBackEndsAgree(frames, "moving-objects");
+}
+
+// The firefly removal's tile pass on the GPU (shared memory, a barrier between phases) gives
+// the CPU's separate passes' result, whichever the GPU's default.
+TEST(Gpu, CudaTilePassesAgreeWithTheCpu) {
+    std::string reason = cudaUnavailableReason();
+    if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects");
+    expectBackEndsAgree(frames, "moving-objects, tile passes on",
+                        {Method::Atrous, Method::Temporal, Method::Svgf}, TilePasses::On);
+    expectBackEndsAgree(frames, "moving-objects, tile passes off",
+                        {Method::Atrous, Method::Temporal, Method::Svgf}, TilePasses::Off);
 }
 
 // 1400x1000: each RGB input is 16.8 MB, over two of the pinned chunks that copies in and out

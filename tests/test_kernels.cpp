@@ -491,6 +491,96 @@ TEST(Outlier, FireflyIsClampedToMeanPlusTwoSigmaOthersKept) {
     EXPECT_EQ(h.planes(h.b).load(h.layout.index(0, 0)).x, 1.0f);  // neighbour below its limit
 }
 
+// The firefly removal's tile pass (OutlierTile) gives the separate passes' result: the
+// despeckled colour, and with the clamp window its row sums of that colour (ColorRowSums), on
+// images that end inside a tile, with background and two objects, for radii 1 to 3; run by the
+// CPU launcher and as the GPU's blocks would run it (any order of the items within a phase).
+TEST(OutlierTile, GivesTheSeparatePassesResult) {
+    for (auto [w, h] : {std::pair{45, 21}, std::pair{70, 9}, std::pair{3, 2}, std::pair{32, 8}})
+        for (int radius = 1; radius <= kNarrowWindow; ++radius) {
+            SCOPED_TRACE(::testing::Message() << w << "x" << h << ", radius " << radius);
+            Harness harness(w, h, kNarrowWindow);
+            const Layout& L = harness.layout;
+            UnitRandom next{777u + unsigned(radius)};
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    auto i = L.index(x, y);
+                    float firefly = next() < 0.05f ? 40.0f : 1.0f;
+                    harness.planes(harness.a).store(i, make3(next(), next(), next()) * firefly);
+                    float r = next();
+                    harness.ids.data()[i] = r < 0.2f ? -1 : (x + y) % 7 < 3 ? 1 : 0;
+                }
+            const float k = 1.5f;
+            // The separate passes: a -> b (despeckled), then the clamp's row sums of b.
+            harness.removeOutliers(radius, k);
+            DeviceBuffer<float> clampSums = harness.buffer(7);
+            harness.device->launch(ColorRowSumsKernel{harness.gbuffer(), harness.planes(harness.b),
+                                                      harness.planeSet(clampSums), 3},
+                                   w, h);
+            for (int form = 0; form < 2; ++form) {
+                DeviceBuffer<float> out = harness.buffer(3), tileSums = harness.buffer(7);
+                OutlierClampTileKernel kernel{harness.gbuffer(),
+                                              harness.planes(harness.a),
+                                              harness.planes(out),
+                                              harness.planeSet(tileSums),
+                                              radius,
+                                              k};
+                if (form == 0)
+                    harness.device->launch(kernel, w, h);
+                else
+                    runTilesAsBlocks(kernel, w, h);
+                // The plain tile (no clamp sums) writes the same colour.
+                DeviceBuffer<float> plainOut = harness.buffer(3);
+                OutlierTileKernel plain{harness.gbuffer(),
+                                        harness.planes(harness.a),
+                                        harness.planes(plainOut),
+                                        {},
+                                        radius,
+                                        k};
+                if (form == 0)
+                    harness.device->launch(plain, w, h);
+                else
+                    runTilesAsBlocks(plain, w, h);
+                for (int y = 0; y < h; ++y)
+                    for (int x = 0; x < w; ++x) {
+                        auto i = L.index(x, y);
+                        Float3 want = harness.planes(harness.b).load(i);
+                        EXPECT_TRUE(nearUpToRounding(harness.planes(out).load(i), want))
+                            << "form " << form << " at " << x << ", " << y;
+                        EXPECT_TRUE(nearUpToRounding(harness.planes(plainOut).load(i), want))
+                            << "form " << form << " at " << x << ", " << y;
+                        for (int p = 0; p < 7; ++p) {
+                            float got = harness.planeSet(tileSums).at(p, i),
+                                  expected = harness.planeSet(clampSums).at(p, i);
+                            EXPECT_NEAR(got, expected, 4.0f * roundingTolerance(expected))
+                                << "form " << form << ", plane " << p << " at " << x << ", " << y;
+                        }
+                    }
+                // Nothing written outside the image (the border stays 0).
+                for (int y = -kNarrowWindow; y < h + kNarrowWindow; ++y)
+                    for (int x = -kNarrowWindow; x < w + kNarrowWindow; ++x) {
+                        if (x >= 0 && x < w && y >= 0 && y < h) continue;
+                        auto i = L.index(x, y);
+                        EXPECT_EQ(harness.planes(out).load(i).x, 0.0f) << x << ", " << y;
+                        EXPECT_EQ(harness.planeSet(tileSums).at(0, i), 0.0f) << x << ", " << y;
+                    }
+            }
+        }
+}
+
+// The firefly really is removed by the tile pass (a known answer, as for Outlier above).
+TEST(OutlierTile, FireflyIsClampedToMeanPlusTwoSigma) {
+    Harness h(7, 7, 3);
+    h.setAll(h.a, make3(1.0f, 1.0f, 1.0f));
+    h.planes(h.a).store(h.layout.index(3, 3), make3(50.0f, 50.0f, 50.0f));
+    h.device->launch(OutlierTileKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), {}, 3, 2.0f}, 7,
+                     7);
+    double mean = (48.0 + 50.0) / 49.0;
+    double limit = mean + 2.0 * std::sqrt((48.0 + 2500.0) / 49.0 - mean * mean);
+    EXPECT_NEAR(h.planes(h.b).load(h.layout.index(3, 3)).x, limit, 1e-3);
+    EXPECT_EQ(h.planes(h.b).load(h.layout.index(0, 0)).x, 1.0f);
+}
+
 // The row + column sums equal the 2-D window sums, for a narrow and a wide kernel and radii
 // below their compile-time width (the masked taps).
 template <int MaxRadius>

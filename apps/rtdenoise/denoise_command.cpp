@@ -47,6 +47,8 @@ const std::map<std::string, CpuIsa> kCpuIsas{{"auto", CpuIsa::Auto},
                                              {"sse2", CpuIsa::Sse2},
                                              {"avx2", CpuIsa::Avx2},
                                              {"avx512", CpuIsa::Avx512}};
+const std::map<std::string, TilePasses> kTilePasses{
+    {"auto", TilePasses::Auto}, {"on", TilePasses::On}, {"off", TilePasses::Off}};
 
 // An option taking one of `choices` by name (any case). A wrong name fails with the names
 // allowed ("--method: magic not in {atrous, jbf, svgf, temporal}"), not the enum values.
@@ -226,6 +228,10 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     addChoice(c, "--cpu-isa", s.cpuIsa, kCpuIsas,
               "Instruction set of the CPU kernels (auto: the widest this processor has)",
               "auto|scalar|sse2|avx2|avx512");
+    addChoice(c, "--tile-passes", s.tilePasses, kTilePasses,
+              "Firefly removal (and svgf's clamp-window row sums) as one tile pass (on) or "
+              "separate passes (off); the same result (auto: the device's choice)",
+              "auto|on|off");
     c.add_option("--sigma-color", s.edges.sigmaColor, "[>0] colour edge-stopping sigma")
         ->capture_default_str();
     c.add_option("--sigma-normal", s.edges.sigmaNormal,

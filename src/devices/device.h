@@ -36,6 +36,10 @@ class Device {
     // accumulation, ReprojectAccumulate.)
     virtual bool prefersFusedPasses() const { return false; }
 
+    // True where the firefly removal runs as one tile pass (OutlierTile, tile.h), its window's
+    // row sums kept in the tile rather than in planes a second pass reads back (and SVGF's
+    // history-clamp row sums computed in the same pass).
+    virtual bool runsTilePasses() const { return false; }
     // Working memory the course's A-Trous levels need besides their buffers on this device (the
     // CPU's rows of pair weights, CpuScratch), for frames of `layout` and levels up to stride
     // layout.padding / 2: reserved with the denoiser's buffers, so that no pass allocates.

@@ -12,6 +12,7 @@
 #include "kernels/jbf.h"
 #include "kernels/modulate.h"
 #include "kernels/outlier.h"
+#include "kernels/outlier_tile.h"
 #include "kernels/reproject.h"
 #include "kernels/svgf.h"
 #include "kernels/window_sums.h"
@@ -40,6 +41,8 @@ inline constexpr bool
     X(ColorRowSumsWideKernel)               \
     X(OutlierKernel)                        \
     X(OutlierWideKernel)                    \
+    X(OutlierTileKernel)                    \
+    X(OutlierClampTileKernel)               \
     X(JbfKernel)                            \
     X(JbfNarrowNormalKernel)                \
     X(AtrousKernel)                         \

@@ -7,6 +7,20 @@
 
 namespace rtd {
 
+// Colour c with its luminance clamped to mean + k * stddev of its window's luminance (the window's
+// object pixels: their count, sum and sum of squares), its hue kept. Background keeps its value
+// (its window statistics are not its own).
+RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, float count, float sum,
+                                            float sumSquares, float k) {
+    count = maxf(count, 1.0f);
+    float mean = sum / count;
+    float variance = maxf(sumSquares / count - mean * mean, 0.0f);
+    float limit = mean + k * std::sqrt(variance);
+    float l = luminance(c);
+    float scale = foreground && l > limit && l > 0.0f ? limit / l : 1.0f;
+    return c * scale;
+}
+
 template <int MaxRadius>
 struct Outlier {
     GBufferView g;
@@ -18,16 +32,10 @@ struct Outlier {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
-        Float3 c = in.load(i);
-        float count = maxf(columnSum<MaxRadius>(rowSums, 0, i, L.pitch, radius), 1.0f);
-        float mean = columnSum<MaxRadius>(rowSums, 1, i, L.pitch, radius) / count;
-        float variance =
-            maxf(columnSum<MaxRadius>(rowSums, 2, i, L.pitch, radius) / count - mean * mean, 0.0f);
-        float limit = mean + k * std::sqrt(variance);
-        float l = luminance(c);
-        // Background keeps its value (its window statistics are not its own).
-        float scale = g.objectId[i] >= 0 && l > limit && l > 0.0f ? limit / l : 1.0f;
-        out.store(i, c * scale);
+        out.store(i, despeckle(in.load(i), g.objectId[i] >= 0,
+                               columnSum<MaxRadius>(rowSums, 0, i, L.pitch, radius),
+                               columnSum<MaxRadius>(rowSums, 1, i, L.pitch, radius),
+                               columnSum<MaxRadius>(rowSums, 2, i, L.pitch, radius), k));
     }
 };
 using OutlierKernel = Outlier<kNarrowWindow>;

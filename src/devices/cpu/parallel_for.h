@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <concepts>
+#include <utility>
 
 #include "core/host_device.h"
 #include "devices/cpu/cpu_scratch.h"
@@ -284,31 +285,70 @@ inline std::size_t sharingScratchFloats(int width, int height, int padding) {
     return most * std::size_t(omp_get_max_threads());
 }
 
+// A tile kernel's phase p for one tile (tile.h): its rows of items, each row vectorised.
+template <int Phase, class Kernel>
+RTD_INLINE void runTilePhase(const Kernel& kernel, typename Kernel::Shared& shared, int tileX,
+                             int tileY) {
+    constexpr PhaseExtent e = Kernel::phaseExtent(Phase);
+    for (int v = e.v0; v < e.v0 + e.height; ++v) {
+        RTD_CPU_SIMD
+        for (int u = e.u0; u < e.u0 + e.width; ++u)
+            kernel.template item<Phase>(shared, tileX, tileY, u, v);
+    }
+}
+
+// Tiles shared out to all cores; each core runs a tile's phases in order with the tile's
+// intermediates (Shared) on its stack, where they stay in L1.
+template <class Kernel>
+void parallelTiles(int width, int height, const Kernel& kernel) {
+    const int across = tilesAcross<Kernel>(width), tiles = across * tilesDown<Kernel>(height);
+#pragma omp parallel
+    {
+        flushDenormalsToZero();
+        const Kernel local = kernel;  // a private copy, as in parallelRows
+        typename Kernel::Shared shared;
+#pragma omp for schedule(dynamic, 4)
+        for (int t = 0; t < tiles; ++t) {
+            const int tileX = t % across * Kernel::kTileWidth,
+                      tileY = t / across * Kernel::kTileHeight;
+            [&]<int... Phase>(std::integer_sequence<int, Phase...>) {
+                (runTilePhase<Phase>(local, shared, tileX, tileY), ...);
+            }
+            (std::make_integer_sequence<int, Kernel::kPhases>{});
+        }
+    }
+}
+
 // scratch: the device's, for the kernels that need it (SharesPairs); without it they run in
 // their per-pixel form, as they do at strides of the image's height or more (every tap off the
 // centre's row then lies in the border: nothing to share, and the plain order's ring would
 // hold 2 stride + 1 rows, 210 MB for the 10th level at 512x512).
 template <class Kernel>
 void parallelFor2D(int width, int height, const Kernel& kernel, CpuScratch* scratch = nullptr) {
-    if constexpr (kHasTapRowStride<Kernel>) {
-        int stride = kernel.tapRowStride();
-        if constexpr (SharesPairs<Kernel>) {
-            if (scratch && stride < height) {
-                float* memory =
-                    scratch->floats(sharingScratchFloats(width, height, kernel.g.layout.padding));
-                if (visitsInterleaved(stride, width, height))
+    if constexpr (kIsTileKernel<Kernel>) {
+        parallelTiles(width, height, kernel);
+    } else {
+        if constexpr (kHasTapRowStride<Kernel>) {
+            int stride = kernel.tapRowStride();
+            if constexpr (SharesPairs<Kernel>) {
+                if (scratch && stride < height) {
+                    float* memory = scratch->floats(
+                        sharingScratchFloats(width, height, kernel.g.layout.padding));
+                    if (visitsInterleaved(stride, width, height))
+                        return parallelRowsSharingPairs(
+                            width, height, kernel,
+                            [=](int k) { return interleavedRow(k, height, stride); }, stride,
+                            memory);
                     return parallelRowsSharingPairs(
-                        width, height, kernel,
-                        [=](int k) { return interleavedRow(k, height, stride); }, stride, memory);
-                return parallelRowsSharingPairs(
-                    width, height, kernel, [](int k) { return k; }, 1, memory);
+                        width, height, kernel, [](int k) { return k; }, 1, memory);
+                }
             }
+            if (stride > 1 && stride < height && interleaveRows(stride, width))
+                return parallelRows(width, height, kernel,
+                                    [=](int k) { return interleavedRow(k, height, stride); });
         }
-        if (stride > 1 && stride < height && interleaveRows(stride, width))
-            return parallelRows(width, height, kernel,
-                                [=](int k) { return interleavedRow(k, height, stride); });
+        parallelRows(width, height, kernel, [](int k) { return k; });
     }
-    parallelRows(width, height, kernel, [](int k) { return k; });
 }
 
 }  // namespace

@@ -145,6 +145,29 @@ __global__ void __launch_bounds__(kThreadsPerBlock, LaunchTraits<Kernel>::kMinBl
     if (x < width && y < height) kernel(x, y);
 }
 
+// Tile kernels (tile.h): a block per tile, its threads striding over each phase's items, the
+// tile's intermediates in shared memory, a barrier between phases.
+constexpr int kTileThreads = 256;
+
+template <int Phase, class Kernel>
+__device__ __forceinline__ void runPhasesFrom(const Kernel& kernel, typename Kernel::Shared& shared,
+                                              int tileX, int tileY) {
+    if constexpr (Phase < Kernel::kPhases) {
+        runPhaseItems<Phase>(kernel, shared, tileX, tileY, int(threadIdx.x), int(blockDim.x));
+        if constexpr (Phase + 1 < Kernel::kPhases) {
+            __syncthreads();  // the next phase reads what this one wrote
+            runPhasesFrom<Phase + 1>(kernel, shared, tileX, tileY);
+        }
+    }
+}
+
+template <class Kernel>
+__global__ void __launch_bounds__(kTileThreads) runTileKernel(Kernel kernel) {
+    __shared__ typename Kernel::Shared shared;
+    runPhasesFrom<0>(kernel, shared, int(blockIdx.x) * Kernel::kTileWidth,
+                     int(blockIdx.y) * Kernel::kTileHeight);
+}
+
 // Block shape: 32 x 4, or 64 x 2 for the A-Trous iterations whose taps are 8 or more rows apart
 // (tapRowStride()): a block then fetches half as many distinct rows. Iterations at strides 8 and
 // 16 ran 2-6% faster so (H100, 1080p), those at 1-4 slower.
@@ -197,6 +220,9 @@ class CudaDevice final : public Device {
     bool hasFastLogarithm() const override { return true; }
     bool interleavesGuide() const override { return true; }
     bool prefersFusedPasses() const override { return true; }
+    // The firefly removal's tile pass (OutlierTile) is not the default until timed on a GPU
+    // against the separate passes (bench --device cuda --tile-passes on, then off).
+    bool runsTilePasses() const override { return false; }
 
     void* allocate(std::size_t bytes) override {
         void* p = nullptr;
@@ -282,17 +308,27 @@ class CudaDevice final : public Device {
         return {static_cast<long long>(totals[0]), static_cast<long long>(totals[1])};
     }
 
-#define RTD_DEFINE_LAUNCH(K)                                                          \
-    void launch(const K& kernel, int width, int height) override {                    \
-        dim3 block = blockShape(kernel);                                              \
-        dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y); \
-        launchOn(kernel, grid, block, width, height);                                 \
-        check(cudaGetLastError(), #K);                                                \
+#define RTD_DEFINE_LAUNCH(K)                                       \
+    void launch(const K& kernel, int width, int height) override { \
+        launchAny(kernel, width, height);                          \
+        check(cudaGetLastError(), #K);                             \
     }
     RTD_FOR_EACH_KERNEL(RTD_DEFINE_LAUNCH)
 #undef RTD_DEFINE_LAUNCH
 
   private:
+    template <class Kernel>
+    void launchAny(const Kernel& kernel, int width, int height) {
+        if constexpr (kIsTileKernel<Kernel>) {
+            dim3 grid(tilesAcross<Kernel>(width), tilesDown<Kernel>(height));
+            runTileKernel<<<grid, kTileThreads, 0, stream_>>>(kernel);
+        } else {
+            dim3 block = blockShape(kernel);
+            dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y);
+            launchOn(kernel, grid, block, width, height);
+        }
+    }
+
     // The kernel as FixedStride<Kernel, s> when its stride s is one of those, else as it is.
     template <class Kernel, int Stride = 1>
     void launchOn(const Kernel& kernel, dim3 grid, dim3 block, int width, int height) {
