@@ -33,6 +33,22 @@ if command -v compute-sanitizer > /dev/null; then
 else
     echo "== memcheck: skipped (no compute-sanitizer)"
 fi
+# The firefly removal's tile pass (--tile-passes on; off by default until timed here): races on
+# its shared memory, then alternating runs against the separate passes at 1080p and 4K.
+if command -v compute-sanitizer > /dev/null; then
+    step racecheck-tiles compute-sanitizer --tool racecheck --error-exitcode 1 \
+        "$bin" bench --device cuda --method temporal svgf --size 700x300 --frames 3 --tile-passes on
+    step memcheck-tiles compute-sanitizer --tool memcheck --error-exitcode 1 \
+        "$bin" bench --device cuda --method temporal svgf --size 700x300 --frames 3 --tile-passes on
+fi
+for size in 1920x1080 3840x2160; do
+    for round in 1 2 3; do
+        for tiles in off on; do
+            step "tiles-$size-$tiles-$round" "$bin" bench --device cuda --method temporal svgf \
+                --size "$size" --frames "$frames" --cache /tmp/rtd-bench-cache --tile-passes "$tiles"
+        done
+    done
+done
 step scaling "$bin" bench --device cuda --frames "$frames" --cache /tmp/rtd-bench-cache \
     --json "$out/cuda_scaling.json"
 box=../shared/data/box

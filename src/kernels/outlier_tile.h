@@ -112,7 +112,6 @@ struct OutlierTile {
         } else {
             static_assert(Phase == 3 && ClampRadius > 0, "phase 3: the clamp's row sums");
             // As ColorRowSums over the despeckled colour (radius ClampRadius).
-            if (!inside) return;
             float s0 = 0.0f;
             Float3 s1 = make3(0.0f, 0.0f, 0.0f), s2 = s1;
             const int keep = v * kKeepWidth + (u - kSumU);
@@ -126,10 +125,12 @@ struct OutlierTile {
                 s1 += c;
                 s2 += c * c;
             }
-            const PixelIndex i = L.index(x, y);
-            clampSums.at(0, i) = s0;
-            clampSums.rgb(1).store(i, s1);
-            clampSums.rgb(4).store(i, s2);
+            if (inside) {
+                const PixelIndex i = L.index(x, y);
+                clampSums.at(0, i) = s0;
+                clampSums.rgb(1).store(i, s1);
+                clampSums.rgb(4).store(i, s2);
+            }
         }
     }
 
