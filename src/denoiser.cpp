@@ -118,6 +118,8 @@ struct Denoiser::Impl {
     bool interleavedGuide = false;
     // SVGF's history-clamp row sums come from the firefly removal's tile pass (OutlierTile).
     bool clampRowsInTile = false;
+    // Some pass reads or writes windowSums (set by buildPipeline; else it is not allocated).
+    bool windowSumsUsed = false;
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
@@ -276,7 +278,7 @@ struct Denoiser::Impl {
         if (settings.method == Method::Svgf ||
             (settings.method == Method::Temporal && !d.prefersFusedPasses()))
             derivatives = planesBuffer(3);
-        windowSums = planesBuffer(7);
+        if (windowSumsUsed) windowSums = planesBuffer(7);
         auto idPlane = [&] {  // -1 everywhere: the border reads as background
             DeviceBuffer<std::int32_t> ids(d, padded);
             d.fill(ids.data(), 0xff, ids.bytes());
@@ -397,6 +399,7 @@ struct Denoiser::Impl {
 
     // The assignment's pipeline after the spatial filter.
     void addTemporalPasses() {
+        windowSumsUsed = true;  // the clamp window's
         const bool fused = device->prefersFusedPasses();
         if (fused)
             padding = std::max(padding, 2);  // the fused pass's slopes and 2x2 taps (geometry's)
@@ -492,6 +495,7 @@ struct Denoiser::Impl {
 
     void addSvgfPasses(DeviceBuffer<float>* in, const std::string& inName) {
         const SvgfSettings& sv = settings.svgf;
+        windowSumsUsed = true;  // the accumulation's history clamp
         SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance};
         // The kernels with sigma_n = 128 fixed (svgfWeight), where log2 is not one instruction.
         const bool sigma128 = hasPaperSigmaNormal(terms) && !device->hasFastLogarithm();
@@ -633,6 +637,7 @@ struct Denoiser::Impl {
             if (tiles && radius <= kNarrowWindow) {
                 addOutlierTilePass(radius, k);
             } else {
+                windowSumsUsed = true;
                 addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
                     launchWindowed<LuminanceRowSums>(radius, gbuffer(), planes(noisy), sums(),
                                                      radius);
