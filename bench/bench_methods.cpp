@@ -37,12 +37,14 @@ const std::vector<Frame>& frames() {
 // steady state of all but a sequence's first frames); next() feeds it the following frame.
 struct SteadyState {
     explicit SteadyState(Method method, SpatialFilter filter = SpatialFilter::Atrous,
-                         DeviceType device = DeviceType::Cpu)
+                         DeviceType device = DeviceType::Cpu,
+                         TilePasses tilePasses = TilePasses::Auto)
         : denoiser([&] {
               DenoiserSettings settings;
               settings.method = method;
               settings.device = device;
               settings.temporal.spatialFilter = filter;
+              settings.tilePasses = tilePasses;
               return settings;
           }()) {
         for (const Frame& f : frames()) denoiser.processFrame(f, output);
@@ -128,9 +130,9 @@ BENCHMARK(BM_TemporalJbf)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime
 // denoiser has is in one of them, or in jbf/atrous above), timed alone with the device's pass
 // timestamps (manual time), the frames run in order as above.
 void runPass(benchmark::State& state, Method method, std::size_t pass,
-             DeviceType device = DeviceType::Cpu) {
+             DeviceType device = DeviceType::Cpu, TilePasses tilePasses = TilePasses::Auto) {
     if (skipWithoutFrames(state)) return;
-    SteadyState run(method, SpatialFilter::Atrous, device);
+    SteadyState run(method, SpatialFilter::Atrous, device, tilePasses);
     for (auto _ : state) {
         run.next();
         state.SetIterationTime(run.denoiser.lastFrameStats().passMilliseconds[pass] / 1000.0);
@@ -138,24 +140,44 @@ void runPass(benchmark::State& state, Method method, std::size_t pass,
     state.SetLabel(run.denoiser.passes()[pass].name);
 }
 
-void registerPassBenchmarks() {
-    for (Method method : {Method::Temporal, Method::Svgf}) {
-        DenoiserSettings settings;
-        settings.method = method;
-        settings.device = DeviceType::Cpu;
-        Denoiser probe(settings);
-        for (std::size_t p = 0; p < probe.passes().size(); ++p) {
-            std::string name =
-                std::string("BM_Pass/") + toString(method) + "/" + probe.passes()[p].name;
-            benchmark::RegisterBenchmark(
-                name.c_str(), [method, p](benchmark::State& state) { runPass(state, method, p); })
-                ->Unit(benchmark::kMillisecond)
-                ->UseManualTime()
-                // A fixed count: a pass is a small part of a frame, and Google Benchmark would
-                // otherwise run frames until the pass alone adds up to its minimum time.
-                ->Iterations(20);
-        }
+// The passes a pipeline with these settings has, and (tile passes on, the device's default
+// off) the tile passes: BM_Pass/<prefix>/<pass name>.
+void registerPassesOf(Method method, DeviceType device, const std::string& prefix, int iterations) {
+    DenoiserSettings settings;
+    settings.method = method;
+    settings.device = device;
+    std::unique_ptr<Denoiser> probe;
+    try {
+        probe = std::make_unique<Denoiser>(settings);
+    } catch (const Error&) {
+        return;  // no such device here
     }
+    settings.tilePasses = TilePasses::On;
+    Denoiser tiled(settings);
+    auto add = [&](const std::string& name, std::size_t p, TilePasses tiles) {
+        benchmark::RegisterBenchmark(("BM_Pass/" + prefix + "/" + name).c_str(),
+                                     [method, p, device, tiles](benchmark::State& state) {
+                                         runPass(state, method, p, device, tiles);
+                                     })
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime()
+            // A fixed count: a pass is a small part of a frame, and Google Benchmark would
+            // otherwise run frames until the pass alone adds up to its minimum time.
+            ->Iterations(iterations);
+    };
+    for (std::size_t p = 0; p < probe->passes().size(); ++p)
+        add(probe->passes()[p].name, p, TilePasses::Auto);
+    for (std::size_t p = 0; p < tiled.passes().size(); ++p) {
+        const std::string& name = tiled.passes()[p].name;
+        bool inDefault = false;
+        for (const PassInfo& q : probe->passes()) inDefault = inDefault || q.name == name;
+        if (!inDefault) add(name, p, TilePasses::On);
+    }
+}
+
+void registerPassBenchmarks() {
+    for (Method method : {Method::Temporal, Method::Svgf})
+        registerPassesOf(method, DeviceType::Cpu, toString(method), 20);
 }
 
 // The GPU's cases, registered only where a CUDA denoiser can be made.
@@ -163,7 +185,7 @@ void registerCudaBenchmarks() {
     DenoiserSettings settings;
     settings.method = Method::Svgf;
     settings.device = DeviceType::Cuda;
-    std::unique_ptr<Denoiser> svgf;  // its pass list names the per-pass cases
+    std::unique_ptr<Denoiser> svgf;  // made only where there is a GPU
     try {
         svgf = std::make_unique<Denoiser>(settings);
     } catch (const Error&) {
@@ -181,15 +203,7 @@ void registerCudaBenchmarks() {
             ->UseManualTime()
             ->Iterations(200);
     }
-    for (std::size_t p = 0; p < svgf->passes().size(); ++p) {
-        std::string name = "BM_Pass/cuda/svgf/" + svgf->passes()[p].name;
-        benchmark::RegisterBenchmark(
-            name.c_str(),
-            [p](benchmark::State& state) { runPass(state, Method::Svgf, p, DeviceType::Cuda); })
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime()
-            ->Iterations(200);
-    }
+    registerPassesOf(Method::Svgf, DeviceType::Cuda, "cuda/svgf", 200);
 }
 
 }  // namespace

@@ -608,7 +608,7 @@ struct Denoiser::Impl {
                                                       sums(), radius, k});
                     });
         } else {
-            addPass("outlier", {"noisy", "objectId"}, {"despeckled"}, [this, radius, k] {
+            addPass("outlier-tile", {"noisy", "objectId"}, {"despeckled"}, [this, radius, k] {
                 launch(
                     OutlierTileKernel{gbuffer(), planes(noisy), planes(despeckled), {}, radius, k});
             });

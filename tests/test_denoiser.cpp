@@ -469,8 +469,9 @@ TEST(Denoiser, TilePassesGiveTheSeparatePassesResult) {
         std::vector<std::string> names;
         for (const PassInfo& p : tiled.passes()) names.push_back(p.name);
         const bool svgf = method == Method::Svgf;
-        EXPECT_EQ(names[1], svgf ? "outlier+clamp-rows" : "outlier") << toString(method);
+        EXPECT_EQ(names[1], svgf ? "outlier+clamp-rows" : "outlier-tile") << toString(method);
         EXPECT_EQ(std::count(names.begin(), names.end(), "outlier-rows"), 0);
+        EXPECT_EQ(std::count(names.begin(), names.end(), "outlier"), 0);
         EXPECT_EQ(std::count(names.begin(), names.end(), "svgf-clamp-rows"), 0);
         EXPECT_EQ(separate.passes().size(), tiled.passes().size() + (svgf ? 2 : 1));
         for (std::size_t i = 0; i < frames.size(); ++i) {
