@@ -45,7 +45,7 @@ TEST(Cli, HelpDocumentsEveryOption) {
           "--atrous-passes",    "--alpha",          "--clamp-k",     "--clamp-radius",
           "--outlier",          "--outlier-radius", "--outlier-k",   "--png",
           "--exposure",         "--video",          "--config",      "--debug",
-          "--separate-objects", "--cpu-isa"})
+          "--separate-objects", "--cpu-isa",        "--tile-passes"})
         EXPECT_NE(r.output.find(option), std::string::npos) << option;
 }
 
@@ -175,6 +175,30 @@ TEST(Cli, BenchReportsEveryCaseAsTableAndJson) {
     EXPECT_NE(json.find("\"method\": \"svgf\""), std::string::npos) << json;
     EXPECT_NE(json.find("\"width\": 64, \"height\": 48"), std::string::npos) << json;
     EXPECT_NE(runCli("bench --size 64by48").exitCode, 0);  // a bad size is an error
+}
+
+// --tile-passes on: the firefly removal as one pass (in the per-pass summary, the bench's rows
+// and its JSON), the same results as off.
+TEST(Cli, TilePassesRunAsOnePassWithTheSameResult) {
+    test::TempFolder dir("cli-tiles");
+    writeSequence(dir.path() / "in", 2);
+    Result on = runCli("denoise " + quoted(dir.path() / "in") + " -o " + quoted(dir.path() / "on") +
+                       " --tile-passes on");
+    ASSERT_EQ(on.exitCode, 0) << on.output;
+    EXPECT_NE(on.output.find("outlier+clamp-rows"), std::string::npos) << on.output;
+    EXPECT_EQ(on.output.find("outlier-rows"), std::string::npos) << on.output;
+    Result off = runCli("denoise " + quoted(dir.path() / "in") + " -o " +
+                        quoted(dir.path() / "off") + " --tile-passes off");
+    ASSERT_EQ(off.exitCode, 0) << off.output;
+    EXPECT_NE(off.output.find("outlier-rows"), std::string::npos) << off.output;
+    Image a = readExr(dir.path() / "on" / "result_1.exr", {{"R"}, {"G"}, {"B"}}),
+          b = readExr(dir.path() / "off" / "result_1.exr", {{"R"}, {"G"}, {"B"}});
+    EXPECT_LE(test::maxRelativeDifference(a, b), 1e-5);
+    Result bench = runBench(dir, "--method temporal --frames 2 --tile-passes on");
+    ASSERT_EQ(bench.exitCode, 0) << bench.output;
+    EXPECT_NE(bench.output.find("outlier-tile"), std::string::npos) << bench.output;
+    EXPECT_NE(readText(dir.path() / "bench.json").find("\"tile_passes\": \"on\""),
+              std::string::npos);
 }
 
 TEST(Cli, BenchComparesInstructionSetsAgainstTheScalarKernels) {
