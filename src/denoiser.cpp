@@ -116,10 +116,6 @@ struct Denoiser::Impl {
     // this frame's and the last (in place of the normal and depth planes)
     DeviceBuffer<float> normalDepth[2];
     bool interleavedGuide = false;
-    // SVGF's history-clamp row sums come from the firefly removal's tile pass (OutlierTile).
-    bool clampRowsInTile = false;
-    // Some pass reads or writes windowSums (set by buildPipeline; else it is not allocated).
-    bool windowSumsUsed = false;
     DeviceBuffer<float> stageOutput;
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
@@ -278,7 +274,7 @@ struct Denoiser::Impl {
         if (settings.method == Method::Svgf ||
             (settings.method == Method::Temporal && !d.prefersFusedPasses()))
             derivatives = planesBuffer(3);
-        if (windowSumsUsed) windowSums = planesBuffer(7);
+        if (usesWindowSums()) windowSums = planesBuffer(7);
         auto idPlane = [&] {  // -1 everywhere: the border reads as background
             DeviceBuffer<std::int32_t> ids(d, padded);
             d.fill(ids.data(), 0xff, ids.bytes());
@@ -399,7 +395,6 @@ struct Denoiser::Impl {
 
     // The assignment's pipeline after the spatial filter.
     void addTemporalPasses() {
-        windowSumsUsed = true;  // the clamp window's
         const bool fused = device->prefersFusedPasses();
         if (fused)
             padding = std::max(padding, 2);  // the fused pass's slopes and 2x2 taps (geometry's)
@@ -495,13 +490,12 @@ struct Denoiser::Impl {
 
     void addSvgfPasses(DeviceBuffer<float>* in, const std::string& inName) {
         const SvgfSettings& sv = settings.svgf;
-        windowSumsUsed = true;  // the accumulation's history clamp
         SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance};
         // The kernels with sigma_n = 128 fixed (svgfWeight), where log2 is not one instruction.
         const bool sigma128 = hasPaperSigmaNormal(terms) && !device->hasFastLogarithm();
         padding = std::max({padding, kSvgfWindowRadius, 2 << (sv.iterations - 1)});
         addGeometryPass();
-        if (sv.historyClampK > 0.0f && !clampRowsInTile) {
+        if (sv.historyClampK > 0.0f && !clampRowsInTile()) {
             addPass("svgf-clamp-rows", {inName, "objectId"}, {"windowSums"}, [this, in] {
                 launch(ColorRowSumsKernel{gbuffer(), planes(*in), sums(), kSvgfWindowRadius});
             });
@@ -593,11 +587,30 @@ struct Denoiser::Impl {
         }
     }
 
-    // The firefly removal as one tile pass (Device::runsTilePasses), with SVGF's history-clamp
-    // row sums where SVGF clamps its history (svgf-clamp-rows is then not added).
+    // Whether the firefly removal runs as one tile pass (settings.tilePasses; its window up
+    // to OutlierTile's radius).
+    bool outlierRunsAsTile() const {
+        const bool tiles = settings.tilePasses == TilePasses::On ||
+                           (settings.tilePasses == TilePasses::Auto && device->runsTilePasses());
+        return settings.outlier.enabled && tiles && settings.outlier.radius <= kNarrowWindow;
+    }
+    // Whether that pass computes SVGF's history-clamp row sums too (svgf-clamp-rows is then not
+    // added).
+    bool clampRowsInTile() const {
+        return outlierRunsAsTile() && settings.method == Method::Svgf &&
+               settings.svgf.historyClampK > 0.0f;
+    }
+    // Whether a pass reads or writes windowSums (else it is not allocated): the temporal
+    // methods' clamp windows, and the firefly removal's separate passes.
+    bool usesWindowSums() const {
+        return settings.method == Method::Temporal || settings.method == Method::Svgf ||
+               (settings.outlier.enabled && !outlierRunsAsTile());
+    }
+
+    // The firefly removal as one tile pass (outlierRunsAsTile), with SVGF's history-clamp row
+    // sums where clampRowsInTile.
     void addOutlierTilePass(int radius, float k) {
-        clampRowsInTile = settings.method == Method::Svgf && settings.svgf.historyClampK > 0.0f;
-        if (clampRowsInTile) {
+        if (clampRowsInTile()) {
             static_assert(
                 OutlierClampTileKernel::kPhases == 4 &&
                     std::is_same_v<OutlierClampTileKernel, OutlierTile<kSvgfWindowRadius>>,
@@ -631,13 +644,9 @@ struct Denoiser::Impl {
             int radius = settings.outlier.radius;
             float k = settings.outlier.k;
             padding = std::max(padding, windowReach(radius));
-            const bool tiles =
-                settings.tilePasses == TilePasses::On ||
-                (settings.tilePasses == TilePasses::Auto && device->runsTilePasses());
-            if (tiles && radius <= kNarrowWindow) {
+            if (outlierRunsAsTile()) {
                 addOutlierTilePass(radius, k);
             } else {
-                windowSumsUsed = true;
                 addPass("outlier-rows", {"noisy", "objectId"}, {"windowSums"}, [this, radius] {
                     launchWindowed<LuminanceRowSums>(radius, gbuffer(), planes(noisy), sums(),
                                                      radius);

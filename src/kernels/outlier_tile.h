@@ -78,21 +78,15 @@ struct OutlierTile {
             s.mask[load] = m;
         } else if constexpr (Phase == 1) {
             // As LuminanceRowSums; rows outside the image sum to 0, as their planes stay.
-            float count = 0.0f, sum = 0.0f, sumSquares = 0.0f;
-            if (rowInside) {
-                RTD_UNROLL
-                for (int dx = -kRadius; dx <= kRadius; ++dx) {
-                    float use = s.mask[load + dx] * withinRadius(dx, radius);
-                    float l = s.luminance[load + dx];
-                    count += use;
-                    sum += use * l;
-                    sumSquares += use * l * l;
-                }
-            }
+            LuminanceSums row;
+            if (rowInside)
+                row = luminanceRowSums<kRadius>(
+                    radius, [&](int dx) { return s.mask[load + dx]; },
+                    [&](int dx) { return s.luminance[load + dx]; });
             const int at = sumIndex(u, v);
-            s.sums[at] = count;
-            s.sums[kSumPlane + at] = sum;
-            s.sums[2 * kSumPlane + at] = sumSquares;
+            s.sums[at] = row.count;
+            s.sums[kSumPlane + at] = row.sum;
+            s.sums[2 * kSumPlane + at] = row.sumSquares;
         } else if constexpr (Phase == 2) {
             const PlaneSet sums = {s.sums, kSumPlane};
             const int at = sumIndex(u, v);
@@ -104,7 +98,7 @@ struct OutlierTile {
                                  columnSum<kRadius>(sums, 2, at, kSumWidth, radius), k);
             if (inside && u >= 0 && u < TileWidth) out.store(i, d);
             if constexpr (ClampRadius > 0) {
-                const int keep = v * kKeepWidth + (u - kSumU);
+                const int keep = keepIndex(u, v);
                 s.despeckled[keep] = d.x;
                 s.despeckled[kKeepPlane + keep] = d.y;
                 s.despeckled[2 * kKeepPlane + keep] = d.z;
@@ -112,24 +106,18 @@ struct OutlierTile {
         } else {
             static_assert(Phase == 3 && ClampRadius > 0, "phase 3: the clamp's row sums");
             // As ColorRowSums over the despeckled colour (radius ClampRadius).
-            float s0 = 0.0f;
-            Float3 s1 = make3(0.0f, 0.0f, 0.0f), s2 = s1;
-            const int keep = v * kKeepWidth + (u - kSumU);
-            RTD_UNROLL
-            for (int dx = -ClampRadius; dx <= ClampRadius; ++dx) {
-                float use = s.mask[load + dx];
-                Float3 c = make3(s.despeckled[keep + dx], s.despeckled[kKeepPlane + keep + dx],
-                                 s.despeckled[2 * kKeepPlane + keep + dx]) *
-                           use;
-                s0 += use;
-                s1 += c;
-                s2 += c * c;
-            }
+            const int keep = keepIndex(u, v);
+            ColorSums row = colorRowSums<ClampRadius>(
+                ClampRadius, [&](int dx) { return s.mask[load + dx]; },
+                [&](int dx) {
+                    return make3(s.despeckled[keep + dx], s.despeckled[kKeepPlane + keep + dx],
+                                 s.despeckled[2 * kKeepPlane + keep + dx]);
+                });
             if (inside) {
                 const PixelIndex i = L.index(x, y);
-                clampSums.at(0, i) = s0;
-                clampSums.rgb(1).store(i, s1);
-                clampSums.rgb(4).store(i, s2);
+                clampSums.at(0, i) = row.count;
+                clampSums.rgb(1).store(i, row.sum);
+                clampSums.rgb(4).store(i, row.sumSquares);
             }
         }
     }
@@ -137,6 +125,9 @@ struct OutlierTile {
   private:
     RTD_HOST_DEVICE static constexpr int sumIndex(int u, int v) {
         return (v - kSumV) * kSumWidth + (u - kSumU);
+    }
+    RTD_HOST_DEVICE static constexpr int keepIndex(int u, int v) {
+        return v * kKeepWidth + (u - kSumU);
     }
 };
 // The other methods' firefly removal (its narrow window, radius <= 3: every default).

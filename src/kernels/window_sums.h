@@ -22,6 +22,44 @@ RTD_HOST_DEVICE RTD_INLINE float withinRadius(int offset, int radius) {
     return (offset < 0 ? -offset : offset) <= radius ? 1.0f : 0.0f;
 }
 
+// The sums over one row window, taps dx in [-radius, radius] (radius <= MaxRadius): maskAt(dx),
+// 1 for an object pixel and 0 for background or border; luminanceAt(dx) or colorAt(dx), its
+// value. The row passes below and the tile pass (OutlierTile) sum through these.
+struct LuminanceSums {
+    float count = 0.0f, sum = 0.0f, sumSquares = 0.0f;
+};
+template <int MaxRadius, class MaskAt, class LuminanceAt>
+RTD_HOST_DEVICE RTD_INLINE LuminanceSums luminanceRowSums(int radius, MaskAt maskAt,
+                                                          LuminanceAt luminanceAt) {
+    LuminanceSums s;
+    RTD_UNROLL
+    for (int dx = -MaxRadius; dx <= MaxRadius; ++dx) {
+        float use = maskAt(dx) * withinRadius(dx, radius);
+        float l = luminanceAt(dx);
+        s.count += use;
+        s.sum += use * l;
+        s.sumSquares += use * l * l;
+    }
+    return s;
+}
+struct ColorSums {
+    float count = 0.0f;
+    Float3 sum = {0.0f, 0.0f, 0.0f}, sumSquares = {0.0f, 0.0f, 0.0f};
+};
+template <int MaxRadius, class MaskAt, class ColorAt>
+RTD_HOST_DEVICE RTD_INLINE ColorSums colorRowSums(int radius, MaskAt maskAt, ColorAt colorAt) {
+    ColorSums s;
+    RTD_UNROLL
+    for (int dx = -MaxRadius; dx <= MaxRadius; ++dx) {
+        float use = maskAt(dx) * withinRadius(dx, radius);
+        Float3 c = colorAt(dx) * use;
+        s.count += use;
+        s.sum += c;
+        s.sumSquares += c * c;
+    }
+    return s;
+}
+
 // Planes: 0 count, 1 sum of luminance, 2 sum of luminance^2.
 template <int MaxRadius>
 struct LuminanceRowSums {
@@ -32,18 +70,12 @@ struct LuminanceRowSums {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        float count = 0.0f, sum = 0.0f, sum2 = 0.0f;
-        RTD_UNROLL
-        for (int dx = -MaxRadius; dx <= MaxRadius; ++dx) {
-            float use = foregroundMask(g.objectId[i + dx]) * withinRadius(dx, radius);
-            float l = luminance(color.load(i + dx));
-            count += use;
-            sum += use * l;
-            sum2 += use * l * l;
-        }
-        sums.at(0, i) = count;
-        sums.at(1, i) = sum;
-        sums.at(2, i) = sum2;
+        LuminanceSums s = luminanceRowSums<MaxRadius>(
+            radius, [&](int dx) { return foregroundMask(g.objectId[i + dx]); },
+            [&](int dx) { return luminance(color.load(i + dx)); });
+        sums.at(0, i) = s.count;
+        sums.at(1, i) = s.sum;
+        sums.at(2, i) = s.sumSquares;
     }
 };
 using LuminanceRowSumsKernel = LuminanceRowSums<kNarrowWindow>;
@@ -59,19 +91,12 @@ struct ColorRowSums {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        float s0 = 0.0f;
-        Float3 s1, s2;
-        RTD_UNROLL
-        for (int dx = -MaxRadius; dx <= MaxRadius; ++dx) {
-            float use = foregroundMask(g.objectId[i + dx]) * withinRadius(dx, radius);
-            Float3 c = color.load(i + dx) * use;
-            s0 += use;
-            s1 += c;
-            s2 += c * c;
-        }
-        sums.at(0, i) = s0;
-        sums.rgb(1).store(i, s1);
-        sums.rgb(4).store(i, s2);
+        ColorSums s = colorRowSums<MaxRadius>(
+            radius, [&](int dx) { return foregroundMask(g.objectId[i + dx]); },
+            [&](int dx) { return color.load(i + dx); });
+        sums.at(0, i) = s.count;
+        sums.rgb(1).store(i, s.sum);
+        sums.rgb(4).store(i, s.sumSquares);
     }
 };
 using ColorRowSumsKernel = ColorRowSums<kNarrowWindow>;
