@@ -91,7 +91,12 @@ struct OutlierTile {
             const PlaneSet sums = {s.sums, kSumPlane};
             const int at = sumIndex(u, v);
             const PixelIndex i = L.index(x, y);
-            Float3 c = inside ? in.load(i) : make3(0.0f, 0.0f, 0.0f);
+            // Read at a pixel of the image, then zeroed outside it per component: a select of a
+            // whole Float3 is an aggregate the CPU's vectoriser gives up on (the phase ran scalar).
+            Float3 c = in.load(L.index(mini(maxi(x, 0), L.width - 1), mini(y, L.height - 1)));
+            c.x = inside ? c.x : 0.0f;
+            c.y = inside ? c.y : 0.0f;
+            c.z = inside ? c.z : 0.0f;
             Float3 d = despeckle(c, s.mask[load] > 0.0f,
                                  columnSum<kRadius>(sums, 0, at, kSumWidth, radius),
                                  columnSum<kRadius>(sums, 1, at, kSumWidth, radius),

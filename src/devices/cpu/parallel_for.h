@@ -63,12 +63,21 @@ concept KeyedRuns = requires(const Kernel& k) {
 // The pixel loops' vectorisation: `omp simd` on every instruction-set copy but the scalar one
 // (the baseline speed-ups are measured against).
 #define RTD_PRAGMA(x) _Pragma(#x)
+// RTD_CPU_SIMD_MASKED_TAIL: the same, with clang asked to run a loop's remainder as one masked
+// vector step rather than scalar iterations (loops of a few vectors: a tile phase's rows).
 #if defined(RTD_CPU_SCALAR)
 #define RTD_CPU_SIMD
 #define RTD_CPU_SIMD_OR(flag)
+#define RTD_CPU_SIMD_MASKED_TAIL
 #else
 #define RTD_CPU_SIMD RTD_PRAGMA(omp simd)
 #define RTD_CPU_SIMD_OR(flag) RTD_PRAGMA(omp simd reduction(| : flag))
+#if defined(__clang__)
+#define RTD_CPU_SIMD_MASKED_TAIL \
+    RTD_PRAGMA(clang loop vectorize(assume_safety) vectorize_predicate(enable))
+#else
+#define RTD_CPU_SIMD_MASKED_TAIL RTD_CPU_SIMD
+#endif
 #endif
 
 // Whether pred(x) holds for some x in [x0, x1), tested vectorised.
@@ -291,7 +300,7 @@ RTD_INLINE void runTilePhase(const Kernel& kernel, typename Kernel::Shared& shar
                              int tileY) {
     constexpr PhaseExtent e = Kernel::phaseExtent(Phase);
     for (int v = e.v0; v < e.v0 + e.height; ++v) {
-        RTD_CPU_SIMD
+        RTD_CPU_SIMD_MASKED_TAIL
         for (int u = e.u0; u < e.u0 + e.width; ++u)
             kernel.template item<Phase>(shared, tileX, tileY, u, v);
     }
