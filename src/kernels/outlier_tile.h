@@ -93,6 +93,7 @@ struct OutlierTile {
             const PixelIndex i = L.index(x, y);
             // Read at a pixel of the image, then zeroed outside it per component: a select of a
             // whole Float3 is an aggregate the CPU's vectoriser gives up on (the phase ran scalar).
+            // This phase's rows are the tile's own, so y >= 0 needs no clamp.
             Float3 c = in.load(L.index(mini(maxi(x, 0), L.width - 1), mini(y, L.height - 1)));
             c.x = inside ? c.x : 0.0f;
             c.y = inside ? c.y : 0.0f;
