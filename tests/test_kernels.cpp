@@ -518,29 +518,24 @@ TEST(OutlierTile, GivesTheSeparatePassesResult) {
                                                       harness.planeSet(clampSums), 3},
                                    w, h);
             for (int form = 0; form < 2; ++form) {
-                DeviceBuffer<float> out = harness.buffer(3), tileSums = harness.buffer(7);
-                OutlierClampTileKernel kernel{harness.gbuffer(),
-                                              harness.planes(harness.a),
-                                              harness.planes(out),
-                                              harness.planeSet(tileSums),
-                                              radius,
-                                              k};
-                if (form == 0)
-                    harness.device->launch(kernel, w, h);
-                else
-                    runTilesAsBlocks(kernel, w, h);
+                auto run = [&, w = w, h = h](const auto& kernel) {
+                    if (form == 0)
+                        harness.device->launch(kernel, w, h);
+                    else
+                        runTilesAsBlocks(kernel, w, h);
+                };
+                DeviceBuffer<float> out = harness.buffer(3), tileSums = harness.buffer(7),
+                                    plainOut = harness.buffer(3);
+                run(OutlierClampTileKernel{harness.gbuffer(), harness.planes(harness.a),
+                                           harness.planes(out), harness.planeSet(tileSums), radius,
+                                           k});
                 // The plain tile (no clamp sums) writes the same colour.
-                DeviceBuffer<float> plainOut = harness.buffer(3);
-                OutlierTileKernel plain{harness.gbuffer(),
-                                        harness.planes(harness.a),
-                                        harness.planes(plainOut),
-                                        {},
-                                        radius,
-                                        k};
-                if (form == 0)
-                    harness.device->launch(plain, w, h);
-                else
-                    runTilesAsBlocks(plain, w, h);
+                run(OutlierTileKernel{harness.gbuffer(),
+                                      harness.planes(harness.a),
+                                      harness.planes(plainOut),
+                                      {},
+                                      radius,
+                                      k});
                 for (int y = 0; y < h; ++y)
                     for (int x = 0; x < w; ++x) {
                         auto i = L.index(x, y);

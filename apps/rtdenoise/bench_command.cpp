@@ -30,7 +30,7 @@ struct BenchOptions {
     fs::path input;  // a sequence folder instead of rendered frames
     fs::path json;
     fs::path cache;  // where rendered inputs are kept (default: a temporary folder)
-    std::string tilePasses = "auto";
+    TilePasses tilePasses = TilePasses::Auto;
 };
 
 struct Timing {
@@ -141,9 +141,7 @@ int runBench(const BenchOptions& o) {
                 settings.method = kBenchMethods.at(methodName);
                 settings.device = kBenchDevices.at(deviceName).type;
                 settings.cpuIsa = kBenchDevices.at(deviceName).isa;
-                settings.tilePasses = o.tilePasses == "on"    ? TilePasses::On
-                                      : o.tilePasses == "off" ? TilePasses::Off
-                                                              : TilePasses::Auto;
+                settings.tilePasses = o.tilePasses;
                 std::unique_ptr<Denoiser> created;
                 try {
                     created = std::make_unique<Denoiser>(settings);
@@ -212,7 +210,7 @@ int runBench(const BenchOptions& o) {
         "\n], \"tile_passes\": \"{}\", \"machine\": {{\"cpu\": \"{}\", \"threads\": {}, "
         "\"cpu_kernels\": \"{}\", "
         "\"gpu\": {}}}}}\n",
-        o.tilePasses, cpuModel(), std::thread::hardware_concurrency(),
+        toString(o.tilePasses), cpuModel(), std::thread::hardware_concurrency(),
         toString(bestCpuInstructionSet()), gpu.empty() ? std::string("null") : "\"" + gpu + "\"");
     if (!o.json.empty()) writeFileAtomically(o.json, json);
     return 0;
@@ -244,11 +242,9 @@ Command addBenchCommand(CLI::App& app) {
     c->add_option("--input", o->input, "A sequence folder to use instead of rendered frames");
     c->add_option("--cache", o->cache, "Folder for rendered inputs (default: the temp folder)");
     c->add_option("--json", o->json, "Also write the results as JSON");
-    c->add_option("--tile-passes", o->tilePasses,
-                  "Firefly removal as one tile pass (on) or separate passes (off) in every case "
-                  "(auto: each device's choice)")
-        ->check(CLI::IsMember({"auto", "on", "off"}))
-        ->capture_default_str();
+    addTilePassesOption(*c, o->tilePasses,
+                        "Firefly removal as one tile pass (on) or separate passes (off) in every "
+                        "case (auto: each device's choice)");
     return {c, [o] { return runBench(*o); }};
 }
 

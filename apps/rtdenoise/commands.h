@@ -26,4 +26,7 @@ void applyConfigFile(CLI::App& command, const std::filesystem::path& file);
 // Registers every denoiser setting as an option of `command` (shared by denoise and bench).
 void addDenoiserOptions(CLI::App& command, DenoiserSettings& settings);
 
+// The --tile-passes option (auto|on|off, any case) into `target`; bench has it too.
+void addTilePassesOption(CLI::App& command, TilePasses& target, const std::string& help);
+
 }  // namespace rtd::cli

@@ -218,6 +218,10 @@ void applyConfigFile(CLI::App& command, const fs::path& file) {
     }
 }
 
+void addTilePassesOption(CLI::App& command, TilePasses& target, const std::string& help) {
+    addChoice(command, "--tile-passes", target, kTilePasses, help, "auto|on|off");
+}
+
 void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     // Named choices: the help shows the names and the default by name, not the enum values.
     addChoice(c, "--method", s.method, kMethods, "Denoising method", "jbf|atrous|temporal|svgf");
@@ -228,10 +232,9 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     addChoice(c, "--cpu-isa", s.cpuIsa, kCpuIsas,
               "Instruction set of the CPU kernels (auto: the widest this processor has)",
               "auto|scalar|sse2|avx2|avx512");
-    addChoice(c, "--tile-passes", s.tilePasses, kTilePasses,
-              "Firefly removal (and svgf's clamp-window row sums) as one tile pass (on) or "
-              "separate passes (off); the same result (auto: the device's choice)",
-              "auto|on|off");
+    addTilePassesOption(c, s.tilePasses,
+                        "Firefly removal (and svgf's clamp-window row sums) as one tile pass (on) "
+                        "or separate passes (off); the same result (auto: the device's choice)");
     c.add_option("--sigma-color", s.edges.sigmaColor, "[>0] colour edge-stopping sigma")
         ->capture_default_str();
     c.add_option("--sigma-normal", s.edges.sigmaNormal,

@@ -25,7 +25,7 @@ enum class CpuIsa { Auto, Scalar, Sse2, Avx2, Avx512 };
 // How the firefly removal runs: as one tile pass, its window statistics kept on chip (shared
 // memory on a GPU) and SVGF's history-clamp row sums computed with it, or as separate passes
 // over planes in memory. The result is the same up to rounding. Windows of radius over 3 always
-// run separately. Auto: the device's choice (the CPU: separate, 4x faster there; a GPU:
+// run separately. Auto: the device's choice (the CPU: separate, 2.3x faster there; a GPU:
 // separate until the tile pass is timed on one).
 enum class TilePasses { Auto, On, Off };
 

@@ -83,12 +83,9 @@ struct OutlierTile {
                 row = luminanceRowSums<kRadius>(
                     radius, [&](int dx) { return s.mask[load + dx]; },
                     [&](int dx) { return s.luminance[load + dx]; });
-            const int at = sumIndex(u, v);
-            s.sums[at] = row.count;
-            s.sums[kSumPlane + at] = row.sum;
-            s.sums[2 * kSumPlane + at] = row.sumSquares;
+            row.storeTo(sumPlanes(s), sumIndex(u, v));
         } else if constexpr (Phase == 2) {
-            const PlaneSet sums = {s.sums, kSumPlane};
+            const PlaneSet sums = sumPlanes(s);
             const int at = sumIndex(u, v);
             const PixelIndex i = L.index(x, y);
             // Read at a pixel of the image, then zeroed outside it per component: a select of a
@@ -103,32 +100,23 @@ struct OutlierTile {
                                  columnSum<kRadius>(sums, 1, at, kSumWidth, radius),
                                  columnSum<kRadius>(sums, 2, at, kSumWidth, radius), k);
             if (inside && u >= 0 && u < TileWidth) out.store(i, d);
-            if constexpr (ClampRadius > 0) {
-                const int keep = keepIndex(u, v);
-                s.despeckled[keep] = d.x;
-                s.despeckled[kKeepPlane + keep] = d.y;
-                s.despeckled[2 * kKeepPlane + keep] = d.z;
-            }
+            if constexpr (ClampRadius > 0) keptPlanes(s).store(keepIndex(u, v), d);
         } else {
             static_assert(Phase == 3 && ClampRadius > 0, "phase 3: the clamp's row sums");
             // As ColorRowSums over the despeckled colour (radius ClampRadius).
             const int keep = keepIndex(u, v);
+            const Planes3 kept = keptPlanes(s);
             ColorSums row = colorRowSums<ClampRadius>(
                 ClampRadius, [&](int dx) { return s.mask[load + dx]; },
-                [&](int dx) {
-                    return make3(s.despeckled[keep + dx], s.despeckled[kKeepPlane + keep + dx],
-                                 s.despeckled[2 * kKeepPlane + keep + dx]);
-                });
-            if (inside) {
-                const PixelIndex i = L.index(x, y);
-                clampSums.at(0, i) = row.count;
-                clampSums.rgb(1).store(i, row.sum);
-                clampSums.rgb(4).store(i, row.sumSquares);
-            }
+                [&](int dx) { return kept.load(keep + dx); });
+            if (inside) row.storeTo(clampSums, L.index(x, y));
         }
     }
 
   private:
+    // Shared's arrays as planes, for the helpers that take planes.
+    RTD_HOST_DEVICE static PlaneSet sumPlanes(Shared& s) { return {s.sums, kSumPlane}; }
+    RTD_HOST_DEVICE static Planes3 keptPlanes(Shared& s) { return {s.despeckled, kKeepPlane}; }
     RTD_HOST_DEVICE static constexpr int sumIndex(int u, int v) {
         return (v - kSumV) * kSumWidth + (u - kSumU);
     }

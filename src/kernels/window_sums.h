@@ -27,6 +27,12 @@ RTD_HOST_DEVICE RTD_INLINE float withinRadius(int offset, int radius) {
 // value. The row passes below and the tile pass (OutlierTile) sum through these.
 struct LuminanceSums {
     float count = 0.0f, sum = 0.0f, sumSquares = 0.0f;
+    // As planes 0 count, 1 sum, 2 sum of squares at i.
+    RTD_HOST_DEVICE RTD_INLINE void storeTo(const PlaneSet& planes, PixelIndex i) const {
+        planes.at(0, i) = count;
+        planes.at(1, i) = sum;
+        planes.at(2, i) = sumSquares;
+    }
 };
 template <int MaxRadius, class MaskAt, class LuminanceAt>
 RTD_HOST_DEVICE RTD_INLINE LuminanceSums luminanceRowSums(int radius, MaskAt maskAt,
@@ -45,6 +51,12 @@ RTD_HOST_DEVICE RTD_INLINE LuminanceSums luminanceRowSums(int radius, MaskAt mas
 struct ColorSums {
     float count = 0.0f;
     Float3 sum = {0.0f, 0.0f, 0.0f}, sumSquares = {0.0f, 0.0f, 0.0f};
+    // As planes 0 count, 1-3 sum, 4-6 sum of squares at i.
+    RTD_HOST_DEVICE RTD_INLINE void storeTo(const PlaneSet& planes, PixelIndex i) const {
+        planes.at(0, i) = count;
+        planes.rgb(1).store(i, sum);
+        planes.rgb(4).store(i, sumSquares);
+    }
 };
 template <int MaxRadius, class MaskAt, class ColorAt>
 RTD_HOST_DEVICE RTD_INLINE ColorSums colorRowSums(int radius, MaskAt maskAt, ColorAt colorAt) {
@@ -70,12 +82,10 @@ struct LuminanceRowSums {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        LuminanceSums s = luminanceRowSums<MaxRadius>(
+        luminanceRowSums<MaxRadius>(
             radius, [&](int dx) { return foregroundMask(g.objectId[i + dx]); },
-            [&](int dx) { return luminance(color.load(i + dx)); });
-        sums.at(0, i) = s.count;
-        sums.at(1, i) = s.sum;
-        sums.at(2, i) = s.sumSquares;
+            [&](int dx) { return luminance(color.load(i + dx)); })
+            .storeTo(sums, i);
     }
 };
 using LuminanceRowSumsKernel = LuminanceRowSums<kNarrowWindow>;
@@ -91,12 +101,10 @@ struct ColorRowSums {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        ColorSums s = colorRowSums<MaxRadius>(
+        colorRowSums<MaxRadius>(
             radius, [&](int dx) { return foregroundMask(g.objectId[i + dx]); },
-            [&](int dx) { return color.load(i + dx); });
-        sums.at(0, i) = s.count;
-        sums.rgb(1).store(i, s.sum);
-        sums.rgb(4).store(i, s.sumSquares);
+            [&](int dx) { return color.load(i + dx); })
+            .storeTo(sums, i);
     }
 };
 using ColorRowSumsKernel = ColorRowSums<kNarrowWindow>;
