@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <fstream>
 #include <map>
@@ -57,13 +58,28 @@ std::string cpuModel() {
     return "unknown CPU";
 }
 
+// The renderer's limit on a side (render::validate).
+constexpr long long kMaxSide = 16384;
+
+// "1920x1080" -> {1920, 1080}; digits parsed with range checks (sscanf's %d wraps).
 std::pair<int, int> parseSize(const std::string& text) {
-    int w = 0, h = 0;
-    char x = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w <= 0 || h <= 0)
-        throw Error(ErrorCode::InvalidArgument,
-                    fmt::format("--size {}: expected WIDTHxHEIGHT, e.g. 1920x1080", text));
-    return {w, h};
+    const auto fail = [&text](const std::string& problem) {
+        return Error(ErrorCode::InvalidArgument, fmt::format("--size {}: {}", text, problem));
+    };
+    const std::size_t x = text.find('x');
+    if (x == std::string::npos) throw fail("expected WIDTHxHEIGHT, e.g. 1920x1080");
+    const auto side = [&](std::string_view digits, const char* name) {
+        long long value = 0;
+        const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+        if (digits.empty() || end != digits.data() + digits.size() ||
+            (ec != std::errc() && ec != std::errc::result_out_of_range))
+            throw fail("expected WIDTHxHEIGHT, e.g. 1920x1080");
+        if (ec == std::errc::result_out_of_range || value < 1 || value > kMaxSide)
+            throw fail(fmt::format("the {} {} is out of range 1..{}", name, digits, kMaxSide));
+        return int(value);
+    };
+    const std::string_view all(text);
+    return {side(all.substr(0, x), "width"), side(all.substr(x + 1), "height")};
 }
 
 const std::map<std::string, Method> kBenchMethods{{"jbf", Method::Jbf},
@@ -91,6 +107,10 @@ std::vector<std::string> benchDeviceNames() {
 }
 
 int runBench(const BenchOptions& o) {
+    // Bad arguments fail now, not after minutes of rendering and timing.
+    if (o.input.empty())
+        for (const std::string& size : o.sizes) parseSize(size);
+    if (!o.json.empty()) checkOutputFile(o.json);
     std::string gpu = gpuName();
     fmt::print("machine: {}, {} hardware threads (CPU kernels: {}); GPU: {}\n", cpuModel(),
                std::thread::hardware_concurrency(), toString(bestCpuInstructionSet()),

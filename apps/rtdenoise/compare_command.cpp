@@ -30,7 +30,8 @@ struct CompareOptions {
     fs::path csv;
     fs::path images;
     fs::path input;
-    std::vector<int> frames;
+    std::vector<std::string> frames;  // compared: "3" or "0..9" items
+    std::vector<std::string> sheets;  // with a contact sheet
     float exposure = 1.0f;
     bool quiet = false;
 };
@@ -111,11 +112,12 @@ std::string tableRow(const std::string& label, const metrics::FrameMetrics& m) {
                        m.temporalError ? sci(*m.temporalError) : std::string("-"));
 }
 
-std::string table(const metrics::SequenceMetrics& s) {
+// Row i of `s` is frame indices[i] of the sequence.
+std::string table(const metrics::SequenceMetrics& s, const std::vector<int>& indices) {
     std::string out = fmt::format("{:>5}  {:>11}  {:>11}  {:>9}  {:>7}  {:>11}\n", "frame", "MSE",
                                   "relMSE", "PSNR (dB)", "SSIM", "temporal");
     for (std::size_t i = 0; i < s.frames.size(); ++i)
-        out += tableRow(std::to_string(i), s.frames[i]);
+        out += tableRow(std::to_string(indices[i]), s.frames[i]);
     out += tableRow("mean", s.mean);
     return out;
 }
@@ -127,10 +129,10 @@ std::string jsonFields(const metrics::FrameMetrics& m) {
         jsonNumber(m.temporalError));
 }
 
-std::string json(const metrics::SequenceMetrics& s) {
+std::string json(const metrics::SequenceMetrics& s, const std::vector<int>& indices) {
     std::string out = "{\n  \"frames\": [\n";
     for (std::size_t i = 0; i < s.frames.size(); ++i)
-        out += fmt::format("    {{\"frame\": {}, {}}}{}\n", i, jsonFields(s.frames[i]),
+        out += fmt::format("    {{\"frame\": {}, {}}}{}\n", indices[i], jsonFields(s.frames[i]),
                            i + 1 < s.frames.size() ? "," : "");
     out += fmt::format("  ],\n  \"mean\": {{{}}}\n}}\n", jsonFields(s.mean));
     return out;
@@ -141,25 +143,89 @@ std::string csvRow(const std::string& label, const metrics::FrameMetrics& m) {
                        csvNumber(m.psnr), csvNumber(m.ssim), csvNumber(m.temporalError));
 }
 
-std::string csv(const metrics::SequenceMetrics& s) {
+std::string csv(const metrics::SequenceMetrics& s, const std::vector<int>& indices) {
     std::string out = "frame,mse,rel_mse,psnr,ssim,temporal_error\n";
-    for (std::size_t i = 0; i < s.frames.size(); ++i) out += csvRow(std::to_string(i), s.frames[i]);
+    for (std::size_t i = 0; i < s.frames.size(); ++i)
+        out += csvRow(std::to_string(indices[i]), s.frames[i]);
     out += csvRow("mean", s.mean);
     return out;
 }
 
 // ---- the command ----
 
-// Frames with a contact sheet: the chosen ones, else first, middle and last.
-std::vector<int> sheetFrames(const std::vector<int>& chosen, int frameCount) {
-    std::vector<int> frames = chosen;
-    if (frames.empty()) frames = {0, frameCount / 2, frameCount - 1};
-    for (int f : frames)
-        if (f < 0 || f >= frameCount)
+// "0,5..7" -> {0, 5, 6, 7}: sorted, each frame once; throws naming `option` for a bad item.
+std::vector<int> parseFrameList(const std::vector<std::string>& items, std::string_view option) {
+    const auto number = [&](std::string_view text, const std::string& item) {
+        int value = -1;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+        if (text.empty() || ec != std::errc() || end != text.data() + text.size() || value < 0)
             throw Error(ErrorCode::InvalidArgument,
-                        fmt::format("--frames: frame {} is outside 0..{}", f, frameCount - 1));
+                        fmt::format("{}: '{}' is not a frame (a number >= 0) or a range A..B",
+                                    option, item));
+        return value;
+    };
+    constexpr long long kMaxListed = 1000000;
+    std::vector<int> frames;
+    for (const std::string& item : items) {
+        const std::size_t dots = item.find("..");
+        if (dots == std::string::npos) {
+            frames.push_back(number(item, item));
+            continue;
+        }
+        const int first = number(std::string_view(item).substr(0, dots), item);
+        const int last = number(std::string_view(item).substr(dots + 2), item);
+        if (last < first || last - first >= kMaxListed)
+            throw Error(ErrorCode::InvalidArgument,
+                        fmt::format("{}: '{}' is not a range A..B with A <= B", option, item));
+        for (int f = first; f <= last; ++f) frames.push_back(f);
+    }
     std::sort(frames.begin(), frames.end());
     frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+    return frames;
+}
+
+// The frames compared: --frames, else all of them, which needs result and reference sets of one
+// length (scoring a longer set's extra frames, or missing some, would be a wrong mean).
+std::vector<int> comparedFrames(const CompareOptions& options, int resultCount,
+                                int referenceCount) {
+    if (options.frames.empty()) {
+        if (resultCount != referenceCount)
+            throw Error(
+                ErrorCode::InvalidInput,
+                fmt::format("{} holds {} results but {} holds {} references: the sets "
+                            "differ in length (choose the frames to compare with "
+                            "--frames, e.g. --frames 0..{})",
+                            options.results.string(), resultCount, options.references.string(),
+                            referenceCount, std::min(resultCount, referenceCount) - 1));
+        std::vector<int> all(std::size_t(resultCount), 0);
+        for (int i = 0; i < resultCount; ++i) all[std::size_t(i)] = i;
+        return all;
+    }
+    std::vector<int> frames = parseFrameList(options.frames, "--frames");
+    const int available = std::min(resultCount, referenceCount);
+    for (int f : frames)
+        if (f >= available)
+            throw Error(ErrorCode::InvalidArgument,
+                        fmt::format("--frames: frame {} is outside 0..{} ({} holds {} results, "
+                                    "{} holds {} references)",
+                                    f, available - 1, options.results.string(), resultCount,
+                                    options.references.string(), referenceCount));
+    return frames;
+}
+
+// Frames with a contact sheet: --sheets (each one compared), else the first, middle and last of
+// the compared frames.
+std::vector<int> sheetFrames(const CompareOptions& options, const std::vector<int>& compared) {
+    if (options.sheets.empty()) {
+        std::vector<int> frames{compared.front(), compared[compared.size() / 2], compared.back()};
+        frames.erase(std::unique(frames.begin(), frames.end()), frames.end());  // sorted already
+        return frames;
+    }
+    std::vector<int> frames = parseFrameList(options.sheets, "--sheets");
+    for (int f : frames)
+        if (!std::binary_search(compared.begin(), compared.end(), f))
+            throw Error(ErrorCode::InvalidArgument,
+                        fmt::format("--sheets: frame {} is not among the frames compared", f));
     return frames;
 }
 
@@ -184,35 +250,27 @@ std::optional<fs::path> inputFolder(const CompareOptions& options, const std::ve
 
 int runCompare(const CompareOptions& options) {
     if (!std::isfinite(options.exposure) || options.exposure <= 0.0f)
-        throw Error(ErrorCode::InvalidArgument,
-                    fmt::format("--exposure must be finite and > 0, got {}", options.exposure));
+        throw Error(
+            ErrorCode::InvalidArgument,
+            fmt::format("--exposure must be a finite number > 0, got {}", options.exposure));
     requireFolder(options.results, "RESULT_DIR");
     requireFolder(options.references, "REFERENCE_DIR");
-    const int frameCount = countFrames(options.results, "result");
-    // Every result needs its reference: checked up front, before minutes of 4K reading.
+    // Both sets counted (each numbered 0..N-1) and matched up front, before minutes of 4K reading.
+    const std::vector<int> compared =
+        comparedFrames(options, countFrames(options.results, "result"),
+                       countFrames(options.references, "reference"));
+    const int frameCount = static_cast<int>(compared.size());
     std::error_code ec;
-    for (int i = 0; i < frameCount; ++i) {
-        const fs::path reference = framePath(options.references, "reference", i);
-        if (!fs::exists(reference, ec))
-            throw Error(ErrorCode::MissingFile,
-                        fmt::format("{}: no such file (the reference of {})", reference.string(),
-                                    framePath(options.results, "result", i).string()));
-    }
 
     // A bad --json/--csv path fails now, not after the whole sequence was read.
-    for (const fs::path& file : {options.json, options.csv}) {
-        const fs::path parent = file.parent_path();
-        if (!file.empty() && !parent.empty() && !fs::is_directory(parent, ec))
-            throw Error(ErrorCode::IoFailure,
-                        fmt::format("{}: cannot write, folder '{}' does not exist", file.string(),
-                                    parent.string()));
-    }
+    for (const fs::path& file : {options.json, options.csv})
+        if (!file.empty()) checkOutputFile(file);
 
     const bool sheets = !options.images.empty();
     std::vector<int> chosen;
     std::optional<fs::path> input;
     if (sheets) {
-        chosen = sheetFrames(options.frames, frameCount);
+        chosen = sheetFrames(options, compared);
         input = inputFolder(options, chosen);
         fs::create_directories(options.images, ec);
         if (!fs::is_directory(options.images))
@@ -221,7 +279,10 @@ int runCompare(const CompareOptions& options) {
                                     options.images.string(), ec ? " (" + ec.message() + ")" : ""));
     }
 
-    metrics::SequenceComparer comparer(options.exposure);
+    // The temporal error compares consecutive frames: a gap in the compared frames starts a new
+    // comparer, so the frame after it has none.
+    std::optional<metrics::SequenceComparer> comparer;
+    std::vector<metrics::FrameMetrics> frameMetrics;
     metrics::ContactSheetOptions sheetOptions;
     sheetOptions.exposure = options.exposure;
     std::vector<fs::path> written;
@@ -233,22 +294,24 @@ int runCompare(const CompareOptions& options) {
             return readPair(options.results, options.references, i);
         });
     };
-    std::future<FramePair> next = readAsync(0);
+    std::future<FramePair> next = readAsync(compared[0]);
     std::string firstSize;
-    for (int i = 0; i < frameCount; ++i) {
+    for (int n = 0; n < frameCount; ++n) {
+        const int i = compared[std::size_t(n)];
         FramePair pair = next.get();
-        if (i + 1 < frameCount) next = readAsync(i + 1);
-        // The temporal error compares consecutive frames: the size must stay that of frame 0.
-        if (i == 0) {
+        if (n + 1 < frameCount) next = readAsync(compared[std::size_t(n) + 1]);
+        // The temporal error compares consecutive frames: the size must stay that of the first.
+        if (n == 0) {
             firstSize = sizeText(pair.result);
         } else if (sizeText(pair.result) != firstSize) {
             throw Error(
                 ErrorCode::InvalidInput,
                 fmt::format("{}: {}, but {} is {}",
                             framePath(options.results, "result", i).string(), sizeText(pair.result),
-                            framePath(options.results, "result", 0).string(), firstSize));
+                            framePath(options.results, "result", compared[0]).string(), firstSize));
         }
-        comparer.addFrame(pair.result, pair.reference);
+        if (n == 0 || compared[std::size_t(n) - 1] != i - 1) comparer.emplace(options.exposure);
+        frameMetrics.push_back(comparer->addFrame(pair.result, pair.reference));
         if (sheets && std::binary_search(chosen.begin(), chosen.end(), i)) {
             std::optional<Image> beauty;
             if (input) {
@@ -262,15 +325,15 @@ int runCompare(const CompareOptions& options) {
                                                 pair.reference, sheetOptions));
             written.push_back(png);
         }
-        progress.update(i + 1);
+        progress.update(n + 1);
     }
     progress.finish();
 
-    const metrics::SequenceMetrics result = comparer.metrics();
-    if (!options.json.empty()) writeFileAtomically(options.json, json(result));
-    if (!options.csv.empty()) writeFileAtomically(options.csv, csv(result));
+    const metrics::SequenceMetrics result{frameMetrics, metrics::meanOf(frameMetrics)};
+    if (!options.json.empty()) writeFileAtomically(options.json, json(result, compared));
+    if (!options.csv.empty()) writeFileAtomically(options.csv, csv(result, compared));
     if (!options.quiet) {
-        fmt::print("{}", table(result));
+        fmt::print("{}", table(result, compared));
         fmt::print("MSE, relMSE: linear RGB; PSNR, SSIM, temporal: tone-mapped (exposure {})\n",
                    options.exposure);
         if (sheets) {
@@ -307,7 +370,13 @@ Command addCompareCommand(CLI::App& app) {
                       "Write contact_<i>.png into this folder (created if missing): input | "
                       "result | reference | relative-error heat map");
     c->add_option("--frames", options->frames,
-                  "Frames with a contact sheet, e.g. 0,9,15 (default: first, middle, last)")
+                  "Frames to compare, e.g. 0,9,15 or 0..9 (default: all; then RESULT_DIR and "
+                  "REFERENCE_DIR must hold as many frames, else this is an error); the temporal "
+                  "error needs the frame before in the list")
+        ->delimiter(',');
+    c->add_option("--sheets", options->sheets,
+                  "Frames with a contact sheet, among those compared, e.g. 0,9 (default: the "
+                  "first, middle and last compared)")
         ->delimiter(',')
         ->needs(images);
     c->add_option("--input", options->input,

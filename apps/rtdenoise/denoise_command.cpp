@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <future>
@@ -69,6 +71,21 @@ void addChoice(CLI::App& c, const std::string& name, Enum& target,
         ->option_text(fmt::format("{} (default {})", names, toString(target)));
 }
 
+// --frames N: a whole number >= 0 (CLI11's NonNegativeNumber names DBL_MAX in its message).
+CLI::Validator frameCountValidator() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            long long value = 0;
+            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+            if (ec != std::errc() || end != text.data() + text.size())
+                return "'" + text + "' is not a whole number of frames";
+            if (value < 0) return text + " is negative: give a frame count, 0 for all frames";
+            if (value > 1000000000) return text + " is out of range: at most 1000000000 frames";
+            return {};
+        },
+        "N>=0");
+}
+
 double median(std::vector<double> v) {
     if (v.empty()) return 0.0;
     std::sort(v.begin(), v.end());
@@ -76,17 +93,87 @@ double median(std::vector<double> v) {
     return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
-int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) {
-    Sequence sequence(options.input);
-    int frames = sequence.frameCount();
-    if (options.maxFrames > 0) frames = std::min(frames, options.maxFrames);
-    prepareOutputFolder(options.output);
-    if (!options.video.empty() && !VideoWriter::ffmpegAvailable())
+// "dir/out/" and "dir/./out" -> "/abs/dir/out": to tell whether two paths name one folder.
+fs::path normalFolder(const fs::path& folder) {
+    fs::path p = fs::absolute(folder).lexically_normal();
+    return p.filename().empty() ? p.parent_path() : p;
+}
+
+// --video's file: a video in the output folder is checked with that folder, which may not exist
+// yet; anywhere else its folder must exist.
+void checkVideoPath(const DenoiseOptions& options) {
+    std::error_code ec;
+    if (fs::is_directory(options.video, ec))
+        throw Error(ErrorCode::IoFailure, fmt::format("--video {}: cannot write, it is a folder",
+                                                      options.video.string()));
+    if (normalFolder(options.video.parent_path().empty() ? "." : options.video.parent_path()) !=
+        normalFolder(options.output))
+        checkOutputFile(options.video);
+    if (!VideoWriter::ffmpegAvailable())
         throw Error(
             ErrorCode::MissingTool,
             "ffmpeg not found on PATH: install it (apt-get install ffmpeg) or drop --video");
+}
 
-    Denoiser denoiser(settings);
+// A folder holds one run: this program's outputs that this run does not rewrite are removed, so
+// a shorter or different run leaves nothing of an earlier one for `compare` to score with it.
+void removeEarlierOutputs(const DenoiseOptions& options, const DenoiserSettings& settings,
+                          int frames) {
+    const bool history = settings.method == Method::Temporal || settings.method == Method::Svgf;
+    const bool svgfViews = settings.method == Method::Svgf;
+    const auto keep = [frames](bool written) { return written ? frames : 0; };
+    removeNumberedFiles(options.output, "result", ".exr", frames);
+    removeNumberedFiles(options.output, "result", ".png", keep(options.png));
+    removeNumberedFiles(options.output, "reprojection", ".png", keep(options.debug && history));
+    removeNumberedFiles(options.output, "variance", ".png", keep(options.debug && svgfViews));
+    removeNumberedFiles(options.output, "history", ".png", keep(options.debug && svgfViews));
+}
+
+// "frame 3: 12 NaN/Inf radiance values replaced by 0", or the total and the frames.
+std::string nonFiniteWarning(const std::vector<std::pair<int, long long>>& perFrame) {
+    if (perFrame.size() == 1)
+        return fmt::format("frame {}: {} NaN/Inf radiance values replaced by 0", perFrame[0].first,
+                           perFrame[0].second);
+    long long total = 0;
+    std::string frames;
+    constexpr std::size_t kListed = 10;
+    for (std::size_t i = 0; i < perFrame.size(); ++i) {
+        total += perFrame[i].second;
+        if (i < kListed)
+            frames +=
+                fmt::format("{}frame {}: {}", i ? ", " : "", perFrame[i].first, perFrame[i].second);
+    }
+    if (perFrame.size() > kListed) frames += ", ...";
+    return fmt::format("{} NaN/Inf radiance values replaced by 0 in {} frames ({})", total,
+                       perFrame.size(), frames);
+}
+
+int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) {
+    // Everything that can be checked is checked before anything is created (not even the output
+    // folder): options, output paths, every frame's files up to their EXR headers. Only a bad
+    // object ID (a pixel value) shows when its frame is read.
+    if (!std::isfinite(options.exposure) || options.exposure <= 0.0f)
+        throw Error(
+            ErrorCode::InvalidArgument,
+            fmt::format("--exposure must be a finite number > 0, got {}", options.exposure));
+    if (!options.video.empty()) checkVideoPath(options);
+    Sequence sequence(options.input);
+    int frames = sequence.frameCount();
+    if (options.maxFrames > 0) frames = std::min(frames, options.maxFrames);
+    const std::vector<ExrSize> sizes = sequence.checkFrames(frames);
+    for (int i = 1; i < frames && !options.video.empty(); ++i)
+        if (sizes[i].width != sizes[0].width || sizes[i].height != sizes[0].height)
+            throw Error(
+                ErrorCode::InvalidInput,
+                fmt::format("{}: {}x{}, but frame 0 is {}x{}: a --video needs frames of "
+                            "one size",
+                            (options.input / fmt::format("beauty_{}.exr", i)).string(),
+                            sizes[i].width, sizes[i].height, sizes[0].width, sizes[0].height));
+    checkOutputFolder(options.output);
+    Denoiser denoiser(settings);  // a device that is not there fails here, before any output
+
+    prepareOutputFolder(options.output);
+    removeEarlierOutputs(options, settings, frames);
     if (!options.quiet) {
         fmt::print(stderr, "rtdenoise: {} frames from {}, method {}, device {}\n", frames,
                    options.input.string(), toString(settings.method), denoiser.deviceName());
@@ -97,7 +184,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     using Clock = std::chrono::steady_clock;
     std::vector<std::vector<double>> passTimes(denoiser.passes().size());
     std::vector<double> frameTimes, readWaitTimes, writeTimes;
-    long long nonFinite = 0;
+    std::vector<std::pair<int, long long>> nonFinite;  // (frame, values replaced)
     auto start = Clock::now();
 
     // Frame i+1 is read on another thread while frame i is denoised.
@@ -144,7 +231,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         const FrameStats& stats = denoiser.lastFrameStats();
         for (std::size_t p = 0; p < passTimes.size(); ++p)
             passTimes[p].push_back(stats.passMilliseconds[p]);
-        nonFinite += stats.nonFiniteReplaced;
+        if (stats.nonFiniteReplaced > 0) nonFinite.emplace_back(i, stats.nonFiniteReplaced);
 
         std::vector<std::pair<std::string, Image>> debug;
         if (options.debug &&
@@ -165,9 +252,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     progress.finish();
     double total = std::chrono::duration<double>(Clock::now() - start).count();
 
-    if (nonFinite > 0)
-        fmt::print(stderr, "rtdenoise: warning: {} NaN/Inf radiance values were replaced by 0\n",
-                   nonFinite);
+    if (!nonFinite.empty())
+        fmt::print(stderr, "rtdenoise: warning: {}\n", nonFiniteWarning(nonFinite));
     if (!options.quiet) {
         fmt::print("{} frames of {}x{} in {:.2f} s ({:.1f} fps overall, I/O included)\n", frames,
                    result.width, result.height, total, frames / total);
@@ -189,6 +275,12 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
 }  // namespace
 
 void applyConfigFile(CLI::App& command, const fs::path& file) {
+    std::error_code ec;
+    if (fs::is_directory(file, ec))
+        throw Error(ErrorCode::InvalidInput,
+                    file.string() +
+                        ": is a folder, not a config file (--config names a TOML/INI "
+                        "file)");
     std::ifstream in(file);
     if (!in) throw Error(ErrorCode::MissingFile, file.string() + ": cannot open the config file");
     std::vector<CLI::ConfigItem> items;
@@ -328,7 +420,7 @@ Command addDenoiseCommand(CLI::App& app) {
                 "object or depth/normal mismatch yellow, background blue, no history black); "
                 "svgf also variance_<i>.png (luminance stddev) and history_<i>.png (length / cap)");
     c->add_option("--frames", options->maxFrames, "Denoise only the first N frames (0: all)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(frameCountValidator());
     c->add_flag("-q,--quiet", options->quiet, "No progress or summary");
     return {c, [c, options, settings] {
                 if (!options->config.empty()) applyConfigFile(*c, options->config);

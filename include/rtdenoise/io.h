@@ -20,6 +20,15 @@ namespace rtd {
 Image readExr(const std::filesystem::path& file,
               const std::vector<std::vector<std::string>>& channelChoices);
 
+// What readExr would return, from the header alone (no pixels read): the image's size, after
+// the checks readExr makes before reading (the file, the channels, a plausible size).
+struct ExrSize {
+    int width = 0;
+    int height = 0;
+};
+ExrSize readExrSize(const std::filesystem::path& file,
+                    const std::vector<std::vector<std::string>>& channelChoices);
+
 // Reads matrix_i.mat: int32 K, then K + 2 row-major float32 4x4 matrices (little-endian).
 struct MatrixFile {
     std::vector<Matrix4> objectToWorld;  // K
@@ -36,9 +45,15 @@ int frameIndexOf(const std::string& fileName, std::string_view stem,
 
 // The number N of "<stem>_<i><extension>" files in `folder`, which must be numbered 0..N-1:
 // throws MissingFile for a missing folder or no such file, InvalidInput naming the first
-// missing file on a gap.
+// missing file on a gap, or an entry of that name that is not a regular file (a folder, a
+// dangling link).
 int countFrames(const std::filesystem::path& folder, std::string_view stem,
                 std::string_view extension = ".exr");
+
+// Removes the regular files "<stem>_<i><extension>" of `folder` with i >= firstRemoved (0: all
+// of them): outputs of an earlier run that this one does not rewrite. Nothing else is touched.
+void removeNumberedFiles(const std::filesystem::path& folder, std::string_view stem,
+                         std::string_view extension, int firstRemoved);
 
 // A folder in the course layout: beauty_i.exr, normal_i.exr, position_i.exr, depth_i.exr,
 // ID_i.exr, matrix_i.mat, optional albedo_i.exr, for i = 0..frameCount-1.
@@ -52,6 +67,12 @@ class Sequence {
 
     // Reads and validates frame i: all buffers the same size, IDs in -1..K-1.
     Frame readFrame(int index) const;
+
+    // Checks frames 0..count-1 as far as can be done without reading pixels, so that a long run
+    // does not fail at frame i: every file present, EXR headers with the channels readFrame
+    // reads, the buffers of a frame of one size, every matrix_i.mat read and validated. Returns
+    // each frame's size. Only the IDs (pixel values) are left to readFrame.
+    std::vector<ExrSize> checkFrames(int count) const;
 
   private:
     std::filesystem::path folder_;
@@ -100,9 +121,24 @@ class VideoWriter {
     std::filesystem::path file_;
     std::filesystem::path tempFile_;
     int width_, height_;
-    void* pipe_ = nullptr;  // FILE* from popen
+    void* pipe_ = nullptr;                              // FILE* writing to ffmpeg's standard input
+    int childPid_ = 0;                                  // ffmpeg
+    int tempRegistration_ = -1, logRegistration_ = -1;  // for abandonTemporaryFiles
     std::vector<unsigned char> rowBuffer_;
 };
+
+// For a program's SIGINT/SIGTERM handler (the library installs none): stops the ffmpeg child of
+// an unfinished video and removes every temporary file a writer has open, so an interrupted run
+// leaves neither behind. Async-signal-safe: kill, waitpid and unlink of paths stored in advance.
+void abandonTemporaryFiles() noexcept;
+
+// Throws IoFailure naming `folder` unless prepareOutputFolder(folder) would succeed: it is a
+// writable folder, or can be created under the nearest existing folder. Creates nothing.
+void checkOutputFolder(const std::filesystem::path& folder);
+
+// Throws IoFailure naming `file` unless it could be written: its folder exists (a folder, not a
+// file) and `file` is not itself a folder. Creates nothing.
+void checkOutputFile(const std::filesystem::path& file);
 
 // Creates `folder` (and its parents) if needed and checks that a file can be written in it;
 // throws IoFailure naming the folder otherwise. Call before a long job, not after it.

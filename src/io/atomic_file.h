@@ -19,11 +19,24 @@ inline void requireParentFolder(const std::filesystem::path& file) {
     const std::filesystem::path parent = file.parent_path();
     if (parent.empty()) return;  // the current folder
     std::error_code ec;
-    if (!std::filesystem::is_directory(parent, ec)) {
-        throw Error(ErrorCode::IoFailure, file.string() + ": cannot write, folder '" +
-                                              parent.string() + "' does not exist");
-    }
+    const std::filesystem::file_status status = std::filesystem::status(parent, ec);
+    if (std::filesystem::is_directory(status)) return;
+    throw Error(ErrorCode::IoFailure,
+                file.string() + ": cannot write, '" + parent.string() +
+                    (std::filesystem::exists(status) ? "' is not a folder" : "' does not exist"));
 }
+
+// The process-wide list of the temporary files being written and of the ffmpeg children, kept
+// so that removeLiveTemporaries() can clean up from a signal handler: fixed slots holding
+// C strings copied in advance, so the handler needs no allocation and no lock.
+// Returns the slot to pass to unregisterTemporary, or -1 when the path is not tracked (all slots
+// busy, or a path too long), in which case only the writer's own clean-up removes it.
+int registerTemporary(const std::filesystem::path& path) noexcept;
+void unregisterTemporary(int slot) noexcept;
+void registerChild(pid_t child) noexcept;
+void unregisterChild(pid_t child) noexcept;
+// Kills and reaps the registered children, then unlinks the registered files. Async-signal-safe.
+void removeLiveTemporaries() noexcept;
 
 // ".<name>.tmp-<pid>-<n>" in the same folder: the same file system, so the rename is atomic; the
 // counter keeps two threads of one process writing the same name apart.
@@ -42,12 +55,14 @@ inline std::filesystem::path temporaryPathFor(const std::filesystem::path& file)
 // Removes the temporary file on scope exit unless the write was committed.
 class TemporaryFile {
   public:
-    explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
+    explicit TemporaryFile(std::filesystem::path path)
+        : path_(std::move(path)), registration_(registerTemporary(path_)) {}
     ~TemporaryFile() {
         if (!committed_) {
             std::error_code ec;
             std::filesystem::remove(path_, ec);
         }
+        unregisterTemporary(registration_);
     }
     TemporaryFile(const TemporaryFile&) = delete;
     TemporaryFile& operator=(const TemporaryFile&) = delete;
@@ -68,6 +83,7 @@ class TemporaryFile {
 
   private:
     std::filesystem::path path_;
+    int registration_;  // registered before the file exists, so an interrupt never misses it
     bool committed_ = false;
 };
 

@@ -6,8 +6,10 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfThreading.h>
+#include <ImfTileDescription.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -41,7 +43,135 @@ std::string channelNames(const Imf::ChannelList& channels) {
     return count == 0 ? std::string("no channels") : out;
 }
 
+// A header's size is checked before anything is allocated for it: a corrupt or hostile header
+// would otherwise end in std::bad_alloc or an allocation of gigabytes.
+constexpr std::int64_t kMaxSide = 65536;
+constexpr std::int64_t kMaxPixels = std::int64_t(1) << 28;  // 16384 x 16384
+
+// Scanlines per stored block of each compression (OpenEXR's own table is not public).
+int linesPerChunk(Imf::Compression compression) {
+    switch (compression) {
+        case Imf::NO_COMPRESSION:
+        case Imf::RLE_COMPRESSION:
+        case Imf::ZIPS_COMPRESSION:
+            return 1;
+        case Imf::ZIP_COMPRESSION:
+        case Imf::PXR24_COMPRESSION:
+            return 16;
+        case Imf::PIZ_COMPRESSION:
+        case Imf::B44_COMPRESSION:
+        case Imf::B44A_COMPRESSION:
+        case Imf::DWAA_COMPRESSION:
+            return 32;
+        default:
+            return 256;  // DWAB and any newer one: the fewest blocks, the weakest bound
+    }
+}
+
+// The data window's size, after checking it against a sane maximum and against the file's
+// length: each stored block costs at least 16 bytes (its offset-table entry and its header).
+ExrSize checkedSize(const std::filesystem::path& file, const Imf::Header& header) {
+    const Imath::Box2i window = header.dataWindow();
+    const std::int64_t width = std::int64_t(window.max.x) - window.min.x + 1;
+    const std::int64_t height = std::int64_t(window.max.y) - window.min.y + 1;
+    if (width <= 0 || height <= 0) {
+        throw Error(ErrorCode::InvalidInput, file.string() + ": empty data window");
+    }
+    const std::string claimed = std::to_string(width) + "x" + std::to_string(height);
+    if (width > kMaxSide || height > kMaxSide || width * height > kMaxPixels) {
+        throw Error(ErrorCode::InvalidInput,
+                    file.string() + ": the header claims a " + claimed +
+                        " image, larger than this reader accepts (at most " +
+                        std::to_string(kMaxSide) + " pixels a side and " +
+                        std::to_string(kMaxPixels) + " pixels)");
+    }
+    std::int64_t chunks = 0;
+    if (header.hasTileDescription()) {
+        const Imf::TileDescription& tiles = header.tileDescription();
+        const std::int64_t tx = std::max<std::int64_t>(tiles.xSize, 1);
+        const std::int64_t ty = std::max<std::int64_t>(tiles.ySize, 1);
+        chunks = ((width + tx - 1) / tx) * ((height + ty - 1) / ty);  // level 0 alone
+    } else {
+        const int lines = linesPerChunk(header.compression());
+        chunks = (height + lines - 1) / lines;
+    }
+    std::error_code ec;
+    const std::uintmax_t bytes = std::filesystem::file_size(file, ec);
+    if (!ec && std::int64_t(bytes) < 16 * chunks) {
+        throw Error(ErrorCode::InvalidInput,
+                    file.string() + ": the header claims a " + claimed + " image (" +
+                        std::to_string(chunks) + " blocks of at least 16 bytes), but the file " +
+                        "has only " + std::to_string(bytes) + " bytes: truncated or corrupt");
+    }
+    return {int(width), int(height)};
+}
+
+// The file channel chosen for each entry of `channelChoices` (first match wins); throws
+// InvalidInput naming the file for a missing or subsampled channel.
+std::vector<std::string> chooseChannels(
+    const std::filesystem::path& file, const Imf::ChannelList& channels,
+    const std::vector<std::vector<std::string>>& channelChoices) {
+    std::vector<std::string> chosen;
+    for (const auto& choices : channelChoices) {
+        const std::string* found = nullptr;
+        for (const auto& name : choices) {
+            if (channels.findChannel(name)) {
+                found = &name;
+                break;
+            }
+        }
+        if (!found) {
+            throw Error(ErrorCode::InvalidInput, file.string() + ": missing channel " +
+                                                     quotedList(choices, " or ") +
+                                                     " (has: " + channelNames(channels) + ")");
+        }
+        const Imf::Channel* channel = channels.findChannel(*found);
+        if (channel->xSampling != 1 || channel->ySampling != 1) {
+            throw Error(ErrorCode::InvalidInput, file.string() + ": channel '" + *found +
+                                                     "' is subsampled, which is not supported");
+        }
+        chosen.push_back(*found);
+    }
+    return chosen;
+}
+
+// The checks before opening: channels asked for, the file there and a regular file.
+void requireReadableFile(const std::filesystem::path& file,
+                         const std::vector<std::vector<std::string>>& channelChoices) {
+    if (channelChoices.empty()) {
+        throw Error(ErrorCode::InvalidArgument, file.string() + ": no channels requested");
+    }
+    std::error_code ec;
+    const std::filesystem::file_status status = std::filesystem::status(file, ec);
+    if (!std::filesystem::exists(status)) {
+        const bool dangling =
+            std::filesystem::is_symlink(std::filesystem::symlink_status(file, ec));
+        throw Error(ErrorCode::MissingFile,
+                    file.string() +
+                        (dangling ? ": a link to a file that does not exist" : ": no such file"));
+    }
+    if (!std::filesystem::is_regular_file(status)) {
+        throw Error(ErrorCode::InvalidInput, file.string() + (std::filesystem::is_directory(status)
+                                                                  ? ": is a folder, not an EXR file"
+                                                                  : ": not a regular file"));
+    }
+}
+
 }  // namespace
+
+ExrSize readExrSize(const std::filesystem::path& file,
+                    const std::vector<std::vector<std::string>>& channelChoices) {
+    requireReadableFile(file, channelChoices);
+    try {
+        Imf::InputFile input(file.c_str(), 0);
+        chooseChannels(file, input.header().channels(), channelChoices);
+        return checkedSize(file, input.header());
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw Error(ErrorCode::IoFailure, file.string() + ": " + e.what());
+    }
+}
 
 void setExrThreads(int count) {
     Imf::setGlobalThreadCount(count < 0 ? 0 : count);
@@ -49,47 +179,17 @@ void setExrThreads(int count) {
 
 Image readExr(const std::filesystem::path& file,
               const std::vector<std::vector<std::string>>& channelChoices) {
-    if (channelChoices.empty()) {
-        throw Error(ErrorCode::InvalidArgument, file.string() + ": no channels requested");
-    }
-    std::error_code ec;
-    if (!std::filesystem::exists(file, ec) && !ec) {
-        throw Error(ErrorCode::MissingFile, file.string() + ": no such file");
-    }
+    requireReadableFile(file, channelChoices);
     try {
         Imf::InputFile input(file.c_str(), Imf::globalThreadCount());
         const Imf::Header& header = input.header();
-        const Imf::ChannelList& channels = header.channels();
 
-        // Resolve every output channel to a file channel before reading anything.
-        std::vector<std::string> chosen;
-        for (const auto& choices : channelChoices) {
-            const std::string* found = nullptr;
-            for (const auto& name : choices) {
-                if (channels.findChannel(name)) {
-                    found = &name;
-                    break;
-                }
-            }
-            if (!found) {
-                throw Error(ErrorCode::InvalidInput, file.string() + ": missing channel " +
-                                                         quotedList(choices, " or ") +
-                                                         " (has: " + channelNames(channels) + ")");
-            }
-            const Imf::Channel* channel = channels.findChannel(*found);
-            if (channel->xSampling != 1 || channel->ySampling != 1) {
-                throw Error(ErrorCode::InvalidInput, file.string() + ": channel '" + *found +
-                                                         "' is subsampled, which is not supported");
-            }
-            chosen.push_back(*found);
-        }
-
+        // Resolve every output channel to a file channel, and check the size, before reading
+        // or allocating anything.
+        const std::vector<std::string> chosen =
+            chooseChannels(file, header.channels(), channelChoices);
         const Imath::Box2i window = header.dataWindow();
-        const int width = window.max.x - window.min.x + 1;
-        const int height = window.max.y - window.min.y + 1;
-        if (width <= 0 || height <= 0) {
-            throw Error(ErrorCode::InvalidInput, file.string() + ": empty data window");
-        }
+        const auto [width, height] = checkedSize(file, header);
         const int channelCount = static_cast<int>(chosen.size());
         Image image(width, height, channelCount);
 

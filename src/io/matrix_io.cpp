@@ -45,8 +45,18 @@ Matrix4 decodeMatrix(const std::filesystem::path& file, const unsigned char* byt
 
 MatrixFile readMatrixFile(const std::filesystem::path& file) {
     std::error_code ec;
-    if (!std::filesystem::exists(file, ec) && !ec) {
-        throw Error(ErrorCode::MissingFile, file.string() + ": no such file");
+    const std::filesystem::file_status status = std::filesystem::status(file, ec);
+    if (!std::filesystem::exists(status)) {
+        const bool dangling =
+            std::filesystem::is_symlink(std::filesystem::symlink_status(file, ec));
+        throw Error(ErrorCode::MissingFile,
+                    file.string() +
+                        (dangling ? ": a link to a file that does not exist" : ": no such file"));
+    }
+    if (!std::filesystem::is_regular_file(status)) {
+        throw Error(ErrorCode::InvalidInput, file.string() + (std::filesystem::is_directory(status)
+                                                                  ? ": is a folder, not a .mat file"
+                                                                  : ": not a regular file"));
     }
     std::ifstream in(file, std::ios::binary);
     if (!in) throw Error(ErrorCode::IoFailure, file.string() + ": cannot open for reading");

@@ -1,6 +1,7 @@
 // PNG writing with libpng, encoded in memory and published with writeFileAtomically.
 #include <fmt/format.h>
 #include <png.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -131,6 +132,47 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& b
     if (!written) fail(writeError);
     if (!closed) fail(errno);
     temporary.commitTo(file);
+}
+
+void checkOutputFolder(const std::filesystem::path& folder) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status status = fs::status(folder, ec);
+    if (fs::exists(status)) {
+        if (!fs::is_directory(status))
+            throw Error(ErrorCode::IoFailure,
+                        fmt::format("{}: cannot be the output folder: it is a file, not a folder",
+                                    folder.string()));
+        if (::access(folder.c_str(), W_OK | X_OK) != 0)
+            throw Error(ErrorCode::IoFailure,
+                        fmt::format("{}: the output folder is not writable", folder.string()));
+        return;
+    }
+    // It will be created: the nearest existing folder above it must be a writable folder.
+    fs::path existing = fs::absolute(folder, ec).lexically_normal();
+    while (existing.has_relative_path() && !fs::exists(fs::status(existing, ec)))
+        existing = existing.parent_path();
+    if (!fs::is_directory(fs::status(existing, ec)))
+        throw Error(ErrorCode::IoFailure,
+                    fmt::format("{}: cannot create the output folder: '{}' is a file, not a folder",
+                                folder.string(), existing.string()));
+    if (::access(existing.c_str(), W_OK | X_OK) != 0)
+        throw Error(ErrorCode::IoFailure,
+                    fmt::format("{}: cannot create the output folder: '{}' is not writable",
+                                folder.string(), existing.string()));
+}
+
+void checkOutputFile(const std::filesystem::path& file) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(file, ec))
+        throw Error(ErrorCode::IoFailure,
+                    fmt::format("{}: cannot write, it is a folder", file.string()));
+    io_detail::requireParentFolder(file);
+    const std::filesystem::path parent = file.parent_path();
+    if (::access(parent.empty() ? "." : parent.c_str(), W_OK | X_OK) != 0)
+        throw Error(ErrorCode::IoFailure,
+                    fmt::format("{}: cannot write, folder '{}' is not writable", file.string(),
+                                parent.string()));
 }
 
 void prepareOutputFolder(const std::filesystem::path& folder) {

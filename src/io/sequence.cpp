@@ -59,6 +59,27 @@ void requireSameSize(const std::filesystem::path& file, const Image& image,
     }
 }
 
+// Whether anything has this name (a dangling link too): the optional albedo is then read, and
+// a broken one is an error rather than silently skipped.
+bool hasEntry(const std::filesystem::path& file) {
+    std::error_code ec;
+    return std::filesystem::exists(std::filesystem::symlink_status(file, ec));
+}
+
+// Only regular files, or links to them, are frames; anything else of a frame's name is an error
+// naming it, not a frame whose other files then seem to be missing.
+void requireFrameFile(const std::filesystem::directory_entry& entry) {
+    std::error_code ec;
+    const std::filesystem::file_status status = entry.status(ec);
+    if (std::filesystem::is_regular_file(status)) return;
+    const std::string name = entry.path().string();
+    if (!std::filesystem::exists(status))
+        throw Error(ErrorCode::MissingFile, name + ": a link to a file that does not exist");
+    throw Error(ErrorCode::InvalidInput,
+                name + (std::filesystem::is_directory(status) ? ": is a folder, not a frame file"
+                                                              : ": not a regular file"));
+}
+
 }  // namespace
 
 int frameIndexOf(const std::string& name, std::string_view stem, std::string_view extension) {
@@ -89,7 +110,9 @@ int countFrames(const std::filesystem::path& folder, std::string_view stem,
     std::filesystem::directory_iterator it(folder, ec);
     for (; !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
         const int index = frameIndexOf(it->path().filename().string(), stem, extension);
-        if (index >= 0) indices.push_back(index);
+        if (index < 0) continue;
+        requireFrameFile(*it);
+        indices.push_back(index);
     }
     if (ec) throw Error(ErrorCode::IoFailure, folder.string() + ": cannot list: " + ec.message());
     if (indices.empty())
@@ -110,6 +133,25 @@ int countFrames(const std::filesystem::path& folder, std::string_view stem,
                         describeRanges(indices)));
     }
     return count;
+}
+
+void removeNumberedFiles(const std::filesystem::path& folder, std::string_view stem,
+                         std::string_view extension, int firstRemoved) {
+    std::error_code ec;
+    std::vector<std::filesystem::path> stale;
+    for (std::filesystem::directory_iterator it(folder, ec);
+         !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
+        const int index = frameIndexOf(it->path().filename().string(), stem, extension);
+        std::error_code typeError;
+        if (index >= firstRemoved && it->is_regular_file(typeError)) stale.push_back(it->path());
+    }
+    for (const std::filesystem::path& file : stale) {
+        std::filesystem::remove(file, ec);
+        if (ec)
+            throw Error(
+                ErrorCode::IoFailure,
+                file.string() + ": cannot remove this output of an earlier run: " + ec.message());
+    }
 }
 
 Sequence::Sequence(std::filesystem::path folder)
@@ -169,9 +211,43 @@ Frame Sequence::readFrame(int index) const {
     }
 
     const std::filesystem::path albedoFile = path("albedo", ".exr");
-    std::error_code ec;
-    if (std::filesystem::exists(albedoFile, ec)) frame.albedo = readChecked(albedoFile, kRgb);
+    if (hasEntry(albedoFile)) frame.albedo = readChecked(albedoFile, kRgb);
     return frame;
+}
+
+std::vector<ExrSize> Sequence::checkFrames(int count) const {
+    if (count < 0 || count > frameCount_) {
+        throw Error(ErrorCode::InvalidArgument, folder_.string() + ": cannot check " +
+                                                    std::to_string(count) + " frames, it has " +
+                                                    std::to_string(frameCount_));
+    }
+    std::vector<ExrSize> sizes;
+    for (int index = 0; index < count; ++index) {
+        const std::string suffix = "_" + std::to_string(index);
+        const auto path = [&](const char* stem, const char* extension) {
+            return folder_ / (stem + suffix + extension);
+        };
+        readMatrixFile(path("matrix", ".mat"));  // tiny: read and validated in full
+        const std::filesystem::path beautyFile = path("beauty", ".exr");
+        const ExrSize beauty = readExrSize(beautyFile, kRgb);
+        const auto checkSize = [&](const std::filesystem::path& file,
+                                   const std::vector<std::vector<std::string>>& channels) {
+            const ExrSize size = readExrSize(file, channels);
+            if (size.width != beauty.width || size.height != beauty.height) {
+                throw Error(
+                    ErrorCode::InvalidInput,
+                    fmt::format("{}: {}x{}, but {} is {}x{}", file.string(), size.width,
+                                size.height, beautyFile.string(), beauty.width, beauty.height));
+            }
+        };
+        checkSize(path("normal", ".exr"), kRgb);
+        checkSize(path("position", ".exr"), kRgb);
+        checkSize(path("depth", ".exr"), kDepth);
+        checkSize(path("ID", ".exr"), kId);
+        if (hasEntry(path("albedo", ".exr"))) checkSize(path("albedo", ".exr"), kRgb);
+        sizes.push_back(beauty);
+    }
+    return sizes;
 }
 
 void writeFrame(const std::filesystem::path& folder, int index, const Frame& frame) {

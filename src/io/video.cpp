@@ -1,6 +1,9 @@
-// MP4 output through the ffmpeg program: raw rgb24 frames down a popen pipe, ffmpeg's messages
-// kept in a log beside the temporary file so a failure can say what went wrong.
+// MP4 output through the ffmpeg program: raw rgb24 frames down a pipe to a spawned ffmpeg (its
+// pid known, so an interrupt can stop it), ffmpeg's messages kept in a log beside the temporary
+// file so a failure can say what went wrong.
+#include <fcntl.h>
 #include <pthread.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,6 +21,7 @@
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <vector>
 
 #include "io/atomic_file.h"
 #include "rtdenoise/error.h"
@@ -56,19 +60,6 @@ class SigpipeBlock {
     bool wasPending_ = false;
 };
 
-// Single quotes keep every character literal in sh; a quote itself is closed, escaped, reopened.
-std::string shellQuote(std::string_view text) {
-    std::string out = "'";
-    for (char c : text) {
-        if (c == '\'') {
-            out += "'\\''";
-        } else {
-            out += c;
-        }
-    }
-    return out + "'";
-}
-
 std::filesystem::path logPathFor(const std::filesystem::path& tempFile) {
     return std::filesystem::path(tempFile.string() + ".log");
 }
@@ -85,11 +76,58 @@ std::string logTail(const std::filesystem::path& log) {
 }
 
 // Closes the pipe, waiting for ffmpeg; returns its exit code, or -1 if it did not exit normally.
-int closePipe(void* pipe) {
+int closePipe(void* pipe, int child) {
     SigpipeBlock block;
-    const int status = pclose(static_cast<std::FILE*>(pipe));
-    if (status == -1 || !WIFEXITED(status)) return -1;
+    std::fclose(static_cast<std::FILE*>(pipe));
+    int status = 0;
+    pid_t waited;
+    while ((waited = ::waitpid(child, &status, 0)) == -1 && errno == EINTR) {
+    }
+    io_detail::unregisterChild(child);
+    if (waited == -1 || !WIFEXITED(status)) return -1;
     return WEXITSTATUS(status);
+}
+
+// Starts `arguments` (found on PATH) with its standard input reading from the returned FILE* and
+// its standard error into `log`; throws IoFailure naming `file` if it cannot be started.
+std::FILE* spawnWithPipe(const std::vector<std::string>& arguments,
+                         const std::filesystem::path& log, const std::filesystem::path& file,
+                         pid_t& child) {
+    int ends[2];
+    // Close-on-exec: the child gets the read end as its stdin only, no copy of the write end
+    // (which would keep it from ever seeing the end of its input).
+    if (::pipe2(ends, O_CLOEXEC) != 0)
+        throw Error(ErrorCode::IoFailure,
+                    file.string() + ": cannot start ffmpeg: " + std::strerror(errno));
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, ends[0], STDIN_FILENO);
+    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, log.c_str(),
+                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    std::vector<char*> argv;
+    for (const std::string& argument : arguments)
+        argv.push_back(const_cast<char*>(argument.c_str()));
+    argv.push_back(nullptr);
+    std::fflush(nullptr);  // nothing buffered twice
+    const int failed = ::posix_spawnp(&child, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(ends[0]);
+    if (failed != 0) {
+        ::close(ends[1]);
+        throw Error(ErrorCode::IoFailure,
+                    file.string() + ": cannot start ffmpeg: " + std::strerror(failed));
+    }
+    io_detail::registerChild(child);
+    std::FILE* pipe = ::fdopen(ends[1], "w");
+    if (!pipe) {
+        ::close(ends[1]);
+        int status = 0;
+        ::waitpid(child, &status, 0);
+        io_detail::unregisterChild(child);
+        throw Error(ErrorCode::IoFailure,
+                    file.string() + ": cannot start ffmpeg: " + std::strerror(errno));
+    }
+    return pipe;
 }
 
 void removeQuietly(const std::filesystem::path& file) {
@@ -137,27 +175,45 @@ VideoWriter::VideoWriter(std::filesystem::path file, int width, int height, int 
 
     // Absolute paths: a relative name starting with '-' would read as an ffmpeg option.
     std::error_code ec;
-    const std::filesystem::path output = std::filesystem::absolute(tempFile_, ec);
-    const std::string command =
-        "ffmpeg -y -loglevel error -f rawvideo -pix_fmt rgb24 -s " + std::to_string(width) + "x" +
-        std::to_string(height) + " -r " + std::to_string(framesPerSecond) +
-        " -i - -c:v libx264 -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -crf 18 -f mp4 " +
-        shellQuote((ec ? tempFile_ : output).string()) + " 2> " +
-        shellQuote(logPathFor(ec ? tempFile_ : output).string());
-    std::fflush(nullptr);  // the child would otherwise inherit (and repeat) unflushed output
-    pipe_ = popen(command.c_str(), "w");
-    if (!pipe_) {
-        throw Error(ErrorCode::IoFailure,
-                    file_.string() + ": cannot start ffmpeg: " + std::strerror(errno));
+    const std::filesystem::path absolute = std::filesystem::absolute(tempFile_, ec);
+    const std::filesystem::path output = ec ? tempFile_ : absolute;
+    // Registered before ffmpeg creates them: an interrupt from here on removes both.
+    tempRegistration_ = io_detail::registerTemporary(tempFile_);
+    logRegistration_ = io_detail::registerTemporary(logPathFor(tempFile_));
+    const std::vector<std::string> arguments = {
+        "ffmpeg",       "-y",
+        "-loglevel",    "error",
+        "-f",           "rawvideo",
+        "-pix_fmt",     "rgb24",
+        "-s",           std::to_string(width) + "x" + std::to_string(height),
+        "-r",           std::to_string(framesPerSecond),
+        "-i",           "-",
+        "-c:v",         "libx264",
+        "-pix_fmt",     "yuv420p",
+        "-vf",          "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+        "-crf",         "18",
+        "-f",           "mp4",
+        output.string()};
+    pid_t child = 0;
+    try {
+        pipe_ = spawnWithPipe(arguments, logPathFor(output), file_, child);
+    } catch (...) {
+        removeQuietly(logPathFor(tempFile_));
+        io_detail::unregisterTemporary(tempRegistration_);
+        io_detail::unregisterTemporary(logRegistration_);
+        throw;
     }
+    childPid_ = child;
 }
 
 VideoWriter::~VideoWriter() {
     if (pipe_) {
-        closePipe(pipe_);
+        closePipe(pipe_, childPid_);
         removeQuietly(tempFile_);
         removeQuietly(logPathFor(tempFile_));
     }
+    io_detail::unregisterTemporary(tempRegistration_);
+    io_detail::unregisterTemporary(logRegistration_);
 }
 
 void VideoWriter::addFrame(const Image& displayImage) {
@@ -196,7 +252,7 @@ void VideoWriter::addFrame(const Image& displayImage) {
     }
     if (!written) {
         // ffmpeg has gone: collect its reason and give up on this video.
-        const int code = closePipe(pipe_);
+        const int code = closePipe(pipe_, childPid_);
         pipe_ = nullptr;
         const std::string reason = logTail(logPathFor(tempFile_));
         removeQuietly(tempFile_);
@@ -213,7 +269,7 @@ void VideoWriter::finish() {
                     file_.string() + ": finish on a video that is finished or failed");
     }
     const bool anyFrames = !rowBuffer_.empty();
-    const int code = closePipe(pipe_);
+    const int code = closePipe(pipe_, childPid_);
     pipe_ = nullptr;
     io_detail::TemporaryFile temporary(tempFile_);
     const std::filesystem::path log = logPathFor(tempFile_);

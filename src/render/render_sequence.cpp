@@ -113,17 +113,10 @@ std::string sceneJson(const SceneDefinition& d, const RenderSettings& s,
 // "<prefix>_<n>.<ext>" of the layout with n >= frames: left from an earlier, longer render they
 // would be read as part of this sequence.
 void removeStaleFrames(const fs::path& folder, int frames) {
-    static const std::string_view kStems[] = {"beauty", "albedo", "normal", "position",
-                                              "depth",  "ID",     "matrix", "reference"};
-    std::error_code ec;
-    for (const auto& entry : fs::directory_iterator(folder, ec)) {
-        std::string name = entry.path().filename().string();
-        for (std::string_view stem : kStems) {
-            int index =
-                std::max(frameIndexOf(name, stem, ".exr"), frameIndexOf(name, stem, ".mat"));
-            if (index >= frames) fs::remove(entry.path(), ec);
-        }
-    }
+    static const std::string_view kStems[] = {"beauty", "albedo", "normal",   "position",
+                                              "depth",  "ID",     "reference"};
+    for (std::string_view stem : kStems) removeNumberedFiles(folder, stem, ".exr", frames);
+    removeNumberedFiles(folder, "matrix", ".mat", frames);
 }
 
 }  // namespace
