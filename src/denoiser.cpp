@@ -798,6 +798,8 @@ struct Denoiser::Impl {
         stats.deviceMilliseconds = device->millisecondsBetween(0, int(pipeline.size()));
         Device::InputFlagCounts flags = device->countInputFlags(inputFlags.data(), pixels());
         stats.nonFiniteReplaced = flags.nonFinite;
+        stats.radianceClamped = flags.clamped;
+        stats.missingNormals = flags.missingNormals;
         // Bad IDs were read as background; the frame is refused (before it becomes history),
         // naming the first such pixel.
         if (flags.badObjectIds > 0) throwBadObjectId(f);

@@ -1,5 +1,7 @@
 #include "rtdenoise/settings.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <string>
 
@@ -14,15 +16,19 @@ void require(bool ok, const std::string& what) {
 bool positive(float v) {
     return std::isfinite(v) && v > 0.0f;
 }
+void requireSigma(float v, const std::string& name) {
+    require(std::isfinite(v) && v >= kMinSigma,
+            fmt::format("{} must be >= {:g} (got {:g})", name, kMinSigma, v));
+}
 
 }  // namespace
 
 void validate(const DenoiserSettings& s) {
-    require(positive(s.edges.sigmaColor), "sigma-color must be > 0");
-    require(positive(s.edges.sigmaNormal), "sigma-normal must be > 0");
-    require(positive(s.edges.sigmaPlane), "sigma-plane must be > 0");
+    requireSigma(s.edges.sigmaColor, "sigma-color");
+    requireSigma(s.edges.sigmaNormal, "sigma-normal");
+    requireSigma(s.edges.sigmaPlane, "sigma-plane");
     require(s.jbf.radius >= 0 && s.jbf.radius <= 64, "jbf radius must be in [0, 64]");
-    require(positive(s.jbf.sigmaCoord), "sigma-coord must be > 0");
+    requireSigma(s.jbf.sigmaCoord, "sigma-coord");
     require(s.atrous.passes >= 1 && s.atrous.passes <= 10, "atrous passes must be in [1, 10]");
     require(s.outlier.radius >= 1 && s.outlier.radius <= 15, "outlier radius must be in [1, 15]");
     require(positive(s.outlier.k), "outlier k must be > 0");
@@ -36,9 +42,9 @@ void validate(const DenoiserSettings& s) {
     auto unit = [](float v) { return std::isfinite(v) && v >= 0.0f && v <= 1.0f; };
     require(unit(s.svgf.alpha), "svgf alpha must be in [0, 1]");
     require(unit(s.svgf.momentsAlpha), "svgf moments alpha must be in [0, 1]");
-    require(positive(s.svgf.sigmaDepth), "svgf sigma-depth must be > 0");
-    require(positive(s.svgf.sigmaNormal), "svgf sigma-normal must be > 0");
-    require(positive(s.svgf.sigmaLuminance), "svgf sigma-luminance must be > 0");
+    requireSigma(s.svgf.sigmaDepth, "svgf-sigma-depth");
+    requireSigma(s.svgf.sigmaNormal, "svgf-sigma-normal");
+    requireSigma(s.svgf.sigmaLuminance, "svgf-sigma-luminance");
     require(s.svgf.iterations >= 1 && s.svgf.iterations <= 10,
             "svgf iterations must be in [1, 10]");
     require(s.svgf.feedbackIteration >= 0 && s.svgf.feedbackIteration < s.svgf.iterations,

@@ -27,6 +27,9 @@ struct FrameStats {
     double uploadMilliseconds = 0.0;    // host -> device (including format conversion)
     double downloadMilliseconds = 0.0;  // device -> host
     long long nonFiniteReplaced = 0;    // NaN/Inf values in the beauty set to 0
+    long long radianceClamped = 0;      // beauty values beyond +-kMaxRadiance clamped to it
+    long long missingNormals = 0;       // object pixels with a zero or non-finite normal: their
+                                        // normal terms neutral (filtered by colour and position)
 };
 
 // Debug images (Denoiser::debugImage).

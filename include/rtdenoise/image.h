@@ -9,6 +9,11 @@
 
 namespace rtd {
 
+// Radiance (and albedo) magnitudes above this are clamped to it as a frame is read, and counted
+// (FrameStats::radianceClamped): the filters' sums of squares over their windows then stay
+// finite at any finite input (1e16 squared, times the 31x31 widest window, is under 1e36).
+constexpr float kMaxRadiance = 1e16f;
+
 // A float image with 1 or 3 interleaved channels, rows top to bottom.
 struct Image {
     int width = 0;

@@ -16,6 +16,11 @@ enum class Method {
 
 enum class SpatialFilter { Jbf, Atrous };
 
+// The smallest sigma (and svgf sigma-normal) validate() accepts. Below it a filter keeps every
+// pixel as it is anyway, and far below it 1 / (2 sigma^2) overflows, which made the centre tap's
+// weight 0 * inf (a black image).
+constexpr float kMinSigma = 1e-6f;
+
 enum class DeviceType { Cpu, Cuda, Auto };
 
 // The CPU kernels' instruction set. Auto: the widest this processor and build support. Scalar:

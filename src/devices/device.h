@@ -53,10 +53,13 @@ class Device {
     virtual void fill(void* deviceDst, int value, std::size_t bytes) = 0;
     virtual void synchronize() = 0;
     // The ingest's per-pixel input flags (IngestKernel::inputFlags) summed: values replaced
-    // (bits 0-1) and pixels with a bad object ID (bit 2).
+    // (bits 0-1), pixels with a bad object ID (bit 2), values clamped (bits 3-4), object pixels
+    // without a normal (bit 5).
     struct InputFlagCounts {
         long long nonFinite = 0;
         long long badObjectIds = 0;
+        long long clamped = 0;
+        long long missingNormals = 0;
     };
     virtual InputFlagCounts countInputFlags(const std::uint8_t* deviceFlags, std::size_t n) = 0;
 

@@ -63,12 +63,13 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingTerms base2(EdgeStoppingTerms t) {
 // multiplication per tap: the plane term's normal scaled by sqrt(1 / 2sp^2).
 struct EdgeStoppingCentre {
     Float3 color, normal, position;
-    Float3 planeNormal;  // normal * sqrt(planeScale)
+    Float3 planeNormal;         // normal * sqrt(planeScale)
+    float normalLengthSquared;  // 1 to rounding, 0 without a normal (guideCosine)
 };
 RTD_HOST_DEVICE RTD_INLINE EdgeStoppingCentre edgeStoppingCentre(const EdgeStoppingTerms& t,
                                                                  Float3 color, Float3 normal,
                                                                  Float3 position) {
-    return {color, normal, position, normal * std::sqrt(t.planeScale)};
+    return {color, normal, position, normal * std::sqrt(t.planeScale), dot(normal, normal)};
 }
 
 // bias: subtracted from the colour and normal terms, where it costs no operation (the A-Trous
@@ -80,7 +81,7 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppin
                                                                Float3 positionJ,
                                                                float bias = 0.0f) {
     Float3 dc = c.color - colorJ;
-    float cosine = dot(c.normal, normalJ);
+    float cosine = guideCosine(c.normal, c.normalLengthSquared, normalJ);
     float normalTerm;
     if constexpr (OppositeNormalsVanish) {
         // (1 - c) q(c) / 2sn^2, the scale entering as (s - s c): no multiplication.

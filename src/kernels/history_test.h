@@ -25,7 +25,11 @@ RTD_HOST_DEVICE RTD_INLINE bool acceptHistory(const HistoryTest& t, std::int32_t
     float dz = expectedDepth - previousDepth;
     bool depthOk = absf(dz) <= t.depthTolerance * (fwidthDepth + 0.01f);
     Float3 dn = expectedNormal - previousNormal;
-    bool normalOk = dot(dn, dn) <= square(t.normalTolerance * (fwidthNormal + 0.01f));
+    // A pixel without a normal (0, the ingest's) on either side: the normal test is neutral.
+    bool eitherWithoutNormal =
+        dot(expectedNormal, expectedNormal) * dot(previousNormal, previousNormal) < 0.25f;
+    bool normalOk =
+        (dot(dn, dn) <= square(t.normalTolerance * (fwidthNormal + 0.01f))) | eitherWithoutNormal;
     return (previousId == id) & ((!t.geometry) | (depthOk & normalOk));
 }
 

@@ -1,14 +1,19 @@
 // Frame ingest: the renderer's interleaved RGB buffers into the denoiser's padded planar ones;
 // NaN/Inf in the radiance become 0 and object IDs outside -1..objectCount-1 become background
 // (-1), both flagged so the host can count them: the check runs on the device, in parallel, and
-// no kernel ever indexes the object matrices with a bad ID (device-memory inputs included). A
-// pixel whose normal, position or depth is not finite (degenerate geometry) becomes background
-// too, its geometry 0: it passes through and no filter or history test reads its NaN. With an
-// albedo, object pixels are demodulated here (illumination = colour / max(albedo, epsilon)); the
-// ModulateKernel multiplies the same factor back at the end.
+// no kernel ever indexes the object matrices with a bad ID (device-memory inputs included).
+// Radiance beyond +-kMaxRadiance is clamped to it (flagged): the filters' sums of squares stay
+// finite at any finite input. Normals are normalised; a zero or non-finite one is stored as 0,
+// which makes the filters' normal terms neutral for that pixel (guideCosine), and is flagged. A
+// pixel whose position or depth is not finite (degenerate geometry) becomes background, its
+// geometry 0: it passes through and no filter or history test reads its NaN. With an albedo,
+// object pixels are demodulated here (illumination = colour / clamp(albedo, epsilon,
+// kMaxRadiance), itself within +-kMaxRadiance); the ModulateKernel multiplies the same factor
+// back at the end.
 #pragma once
 
 #include "kernels/views.h"
+#include "rtdenoise/image.h"
 
 namespace rtd {
 
@@ -28,21 +33,25 @@ struct Ingest {
     Planes3 beauty, albedo, normal, position;
     float* depth;
     std::int32_t* objectId;
-    // Per pixel (unpadded): bits 0-1 the radiance values replaced by 0, kBadObjectIdFlag.
+    // Per pixel (unpadded): bits 0-1 the radiance values replaced by 0, kBadObjectIdFlag, bits
+    // 3-4 the radiance values clamped to +-kMaxRadiance, kMissingNormalFlag (an object pixel).
     std::uint8_t* inputFlags;
     NormalDepth4 normalDepth = {};  // InterleavedGuide only
     static constexpr int kBadObjectIdFlag = 4;
+    static constexpr int kClampedShift = 3;
+    static constexpr int kMissingNormalFlag = 32;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex s = PixelIndex(y) * layout.width + x;
         PixelIndex i = layout.index(x, y);
-        int bad = 0;
+        int bad = 0, clamped = 0;
         float c[3];
         for (int k = 0; k < 3; ++k) {
             float v = beautyRgb[3 * s + k];
             bool finite = isFinite(v);
             bad += finite ? 0 : 1;
-            c[k] = finite ? v : 0.0f;
+            clamped += finite && absf(v) > kMaxRadiance ? 1 : 0;
+            c[k] = finite ? clampf(v, -kMaxRadiance, kMaxRadiance) : 0.0f;
         }
         // Background and non-finite albedo: factor 1 (nothing to demodulate, or untrustworthy).
         // Selects per component, not a branch choosing a whole vector: that would stop the CPU
@@ -54,19 +63,28 @@ struct Ingest {
         Float3 n = make3(normalRgb[3 * s], normalRgb[3 * s + 1], normalRgb[3 * s + 2]);
         Float3 p = make3(positionRgb[3 * s], positionRgb[3 * s + 1], positionRgb[3 * s + 2]);
         float z = depthIn[s];
-        bool geometryFinite = isFinite(n.x) && isFinite(n.y) && isFinite(n.z) && isFinite(p.x) &&
-                              isFinite(p.y) && isFinite(p.z) && isFinite(z);
+        bool geometryFinite = isFinite(p.x) && isFinite(p.y) && isFinite(p.z) && isFinite(z);
         std::int32_t kept = idValid && geometryFinite ? id : -1;
+        // A normal shorter than 1e-6 has no direction worth trusting (and 1 / |n| would overflow).
+        float normalLength2 = dot(n, n);
+        bool hasNormal = isFinite(normalLength2) && normalLength2 > 1e-12f;
+        float normalScale = hasNormal && kept >= 0 ? 1.0f / std::sqrt(normalLength2) : 0.0f;
         bool use = albedoRgb && kept >= 0 && isFinite(r) && isFinite(gr) && isFinite(b);
         Float3 a;
-        a.x = use ? maxf(r, albedoEpsilon) : 1.0f;
-        a.y = use ? maxf(gr, albedoEpsilon) : 1.0f;
-        a.z = use ? maxf(b, albedoEpsilon) : 1.0f;
+        a.x = use ? clampf(r, albedoEpsilon, kMaxRadiance) : 1.0f;
+        a.y = use ? clampf(gr, albedoEpsilon, kMaxRadiance) : 1.0f;
+        a.z = use ? clampf(b, albedoEpsilon, kMaxRadiance) : 1.0f;
         albedo.store(i, a);
-        beauty.store(i, make3(c[0] / a.x, c[1] / a.y, c[2] / a.z));
+        beauty.store(i, make3(clampf(c[0] / a.x, -kMaxRadiance, kMaxRadiance),
+                              clampf(c[1] / a.y, -kMaxRadiance, kMaxRadiance),
+                              clampf(c[2] / a.z, -kMaxRadiance, kMaxRadiance)));
         // Per component, as for the albedo above (a selected vector would stop vectorisation).
         auto finiteOrZero = [geometryFinite](float v) { return geometryFinite ? v : 0.0f; };
-        Float3 keptNormal = make3(finiteOrZero(n.x), finiteOrZero(n.y), finiteOrZero(n.z));
+        // normalScale 0 (background, no normal) times a non-finite component is NaN: zeroed.
+        auto scaledOrZero = [normalScale](float v) {
+            return normalScale > 0.0f ? v * normalScale : 0.0f;
+        };
+        Float3 keptNormal = make3(scaledOrZero(n.x), scaledOrZero(n.y), scaledOrZero(n.z));
         position.store(i, make3(finiteOrZero(p.x), finiteOrZero(p.y), finiteOrZero(p.z)));
         if constexpr (InterleavedGuide) {
             normalDepth.store(i, keptNormal, finiteOrZero(z));
@@ -75,7 +93,9 @@ struct Ingest {
             depth[i] = finiteOrZero(z);
         }
         objectId[i] = kept;
-        inputFlags[s] = std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag));
+        inputFlags[s] =
+            std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag) + (clamped << kClampedShift) +
+                         (kept >= 0 && !hasNormal ? kMissingNormalFlag : 0));
     }
 };
 using IngestKernel = Ingest<false>;

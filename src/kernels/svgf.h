@@ -31,7 +31,8 @@ struct SvgfCentre {
     float depth;
     Float3 normal;
     float luminance;
-    float luminanceScale;  // log2(e) / phi_l: the luminance term in base 2
+    float luminanceScale;       // log2(e) / phi_l: the luminance term in base 2
+    float normalLengthSquared;  // 1 to rounding, 0 without a normal (guideCosine)
 };
 
 // The depth term's denominator for a tap `offset` pixels away, sigma_z |grad z . offset| + eps
@@ -67,7 +68,7 @@ RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre
     float dz = c.depth - depthJ;
     float dl = c.luminance - lumJ;
     float e = (absf(dz) * depthScale - log2Kernel) + absf(dl) * c.luminanceScale;
-    float cosine = dot(c.normal, normalJ);
+    float cosine = guideCosine(c.normal, c.normalLengthSquared, normalJ);
     if constexpr (FixedSigmaNormal < 0) {
         // n.n' <= 0 gives sigma_n log2(1e-30): a weight of 0 (2^-126 on the CPU, exp2's floor).
         float wn = t.sigmaNormal * log2Positive(maxf(cosine, 1e-30f));
@@ -330,7 +331,8 @@ struct SvgfVariance {
         Float3 normalI;
         float depthI;
         loadNormalDepth<InterleavedGuide>(g, i, normalI, depthI);
-        SvgfCentre centre{depthI, normalI, luminance(c), kLog2e / terms.sigmaLuminance};
+        SvgfCentre centre{depthI, normalI, luminance(c), kLog2e / terms.sigmaLuminance,
+                          dot(normalI, normalI)};
         // The neighbourhood's luminance variance, with each tap's mean taken relative to the
         // centre's (shifted data: no cancellation). The centre: weight 1, shifted mean 0.
         float centreMean = moments.at(0, i);
@@ -437,7 +439,8 @@ struct SvgfAtrous {
         SvgfCentre w{
             depthI, normalI, luminance(cI),
             kLog2e /
-                (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f)};
+                (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f),
+            dot(normalI, normalI)};
         return {w,
                 derivatives.at(0, i) * float(step),
                 derivatives.at(1, i) * float(step),

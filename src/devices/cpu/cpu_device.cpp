@@ -71,13 +71,15 @@ class CpuDevice final : public Device {
         return std::chrono::duration<double, std::milli>(stamps_[second] - stamps_[first]).count();
     }
     InputFlagCounts countInputFlags(const std::uint8_t* flags, std::size_t n) override {
-        long long nonFinite = 0, badIds = 0;
-#pragma omp parallel for reduction(+ : nonFinite, badIds) schedule(static)
+        long long nonFinite = 0, badIds = 0, clamped = 0, missingNormals = 0;
+#pragma omp parallel for reduction(+ : nonFinite, badIds, clamped, missingNormals) schedule(static)
         for (std::size_t i = 0; i < n; ++i) {
             nonFinite += flags[i] & 3;
-            badIds += flags[i] >> 2;
+            badIds += (flags[i] >> 2) & 1;
+            clamped += (flags[i] >> 3) & 3;
+            missingNormals += flags[i] >> 5;
         }
-        return {nonFinite, badIds};
+        return {nonFinite, badIds, clamped, missingNormals};
     }
 
 #define RTD_DEFINE_LAUNCH(K)                                       \

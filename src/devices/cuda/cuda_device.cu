@@ -179,16 +179,22 @@ dim3 blockShape(const Kernel& kernel) {
 }
 
 // totals[0]: values replaced (flag bits 0-1); totals[1]: pixels with a bad ID (bit 2).
+constexpr int kInputFlagCounters = 4;  // Device::InputFlagCounts' fields
+
 __global__ void countInputFlagsKernel(const std::uint8_t* flags, std::size_t n,
                                       unsigned long long* totals) {
-    unsigned long long nonFinite = 0, badIds = 0;
+    unsigned long long nonFinite = 0, badIds = 0, clamped = 0, missingNormals = 0;
     for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < n;
          i += std::size_t(gridDim.x) * blockDim.x) {
         nonFinite += flags[i] & 3;
-        badIds += flags[i] >> 2;
+        badIds += (flags[i] >> 2) & 1;
+        clamped += (flags[i] >> 3) & 3;
+        missingNormals += flags[i] >> 5;
     }
     if (nonFinite) atomicAdd(&totals[0], nonFinite);
     if (badIds) atomicAdd(&totals[1], badIds);
+    if (clamped) atomicAdd(&totals[2], clamped);
+    if (missingNormals) atomicAdd(&totals[3], missingNormals);
 }
 
 class CudaDevice final : public Device {
@@ -199,7 +205,8 @@ class CudaDevice final : public Device {
         check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
         name_ = std::string("cuda (") + properties.name + ")";
         check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
-        check(cudaMalloc(&counters_, 2 * sizeof(unsigned long long)), "cudaMalloc");
+        check(cudaMalloc(&counters_, kInputFlagCounters * sizeof(unsigned long long)),
+              "cudaMalloc");
         for (cudaEvent_t& e : events_) check(cudaEventCreate(&e), "cudaEventCreate");
     }
     ~CudaDevice() override {
@@ -300,12 +307,15 @@ class CudaDevice final : public Device {
         return ms;
     }
     InputFlagCounts countInputFlags(const std::uint8_t* flags, std::size_t n) override {
-        check(cudaMemsetAsync(counters_, 0, 2 * sizeof(unsigned long long), stream_), "memset");
+        check(
+            cudaMemsetAsync(counters_, 0, kInputFlagCounters * sizeof(unsigned long long), stream_),
+            "memset");
         countInputFlagsKernel<<<256, 256, 0, stream_>>>(flags, n, counters_);
         check(cudaGetLastError(), "countInputFlags");
-        unsigned long long totals[2] = {};
+        unsigned long long totals[kInputFlagCounters] = {};
         copyToHost(totals, counters_, sizeof totals);
-        return {static_cast<long long>(totals[0]), static_cast<long long>(totals[1])};
+        return {static_cast<long long>(totals[0]), static_cast<long long>(totals[1]),
+                static_cast<long long>(totals[2]), static_cast<long long>(totals[3])};
     }
 
 #define RTD_DEFINE_LAUNCH(K)                                       \
