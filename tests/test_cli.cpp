@@ -1,10 +1,16 @@
 // The rtdenoise command as a user runs it: outputs, config files, progress, and the errors for
 // bad input (message naming the file, non-zero exit, nothing half-written).
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
 
 #include <array>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <thread>
 
 #include "test_support.h"
 
@@ -230,6 +236,309 @@ TEST(Cli, BenchComparesInstructionSetsAgainstTheScalarKernels) {
     EXPECT_NE(bad.exitCode, 0);
     EXPECT_NE(bad.output.find("cpu-isa"), std::string::npos) << bad.output;
     EXPECT_NE(bad.output.find("avx2"), std::string::npos) << bad.output;  // the names allowed
+}
+
+}  // namespace
+}  // namespace rtd
+
+// ---- bad input never gives a wrong result silently (issue 20) ----
+
+namespace rtd {
+namespace {
+
+std::string denoiseCommand(const fs::path& in, const fs::path& out) {
+    return "denoise " + quoted(in) + " -o " + quoted(out) + " -q";
+}
+
+std::vector<std::string> namesIn(const fs::path& folder) {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(folder))
+        names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+    return text.find(part) != std::string::npos;
+}
+
+// Defect 3: a second run into the same folder removes the first run's outputs it does not
+// rewrite (and nothing else), so `compare` cannot score the two runs together.
+TEST(Cli, ASecondRunLeavesOnlyItsOwnOutputs) {
+    test::TempFolder dir("cli-rerun");
+    writeSequence(dir.path() / "in", 3);
+    const fs::path out = dir.path() / "out";
+    ASSERT_EQ(runCli(denoiseCommand(dir.path() / "in", out) + " --png --debug").exitCode, 0);
+    std::ofstream(out / "notes.txt") << "mine";
+    std::ofstream(out / "result_7.exr.bak") << "mine";
+    fs::create_directories(out / "result_5.exr");  // not a file this program wrote
+
+    Result r = runCli(denoiseCommand(dir.path() / "in", out) + " --frames 1 --method jbf");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(namesIn(out), (std::vector<std::string>{"notes.txt", "result_0.exr", "result_5.exr",
+                                                      "result_7.exr.bak"}));
+}
+
+// Defect 3: result and reference sets of different lengths are refused unless --frames says
+// which frames to compare; the rows then carry the real frame numbers.
+TEST(Cli, CompareRefusesSetsOfDifferentLengths) {
+    test::TempFolder dir("cli-compare-lengths");
+    const fs::path results = dir.path() / "results", references = dir.path() / "references";
+    fs::create_directories(results);
+    fs::create_directories(references);
+    for (int i = 0; i < 3; ++i)
+        writeExr(results / ("result_" + std::to_string(i) + ".exr"), Image(8, 4, 3, 0.5f));
+    for (int i = 0; i < 2; ++i)
+        writeExr(references / ("reference_" + std::to_string(i) + ".exr"), Image(8, 4, 3, 0.25f));
+
+    Result r = runCli("compare " + quoted(results) + " " + quoted(references));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, results.string() + " holds 3 results")) << r.output;
+    EXPECT_TRUE(contains(r.output, references.string() + " holds 2 references")) << r.output;
+    EXPECT_TRUE(contains(r.output, "--frames")) << r.output;
+
+    const fs::path json = dir.path() / "m.json";
+    r = runCli("compare " + quoted(results) + " " + quoted(references) + " --frames 1 --json " +
+               quoted(json));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::ifstream in(json);
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    EXPECT_TRUE(contains(text, "{\"frame\": 1, ")) << text;
+    EXPECT_FALSE(contains(text, "\"frame\": 0")) << text;
+    EXPECT_FALSE(contains(text, "\"frame\": 2")) << text;
+
+    r = runCli("compare " + quoted(results) + " " + quoted(references) + " --frames 0..2");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "frame 2 is outside 0..1")) << r.output;
+}
+
+// Starts the command without a shell (a signal must reach it, not sh), its output into `log`.
+pid_t startCli(const std::vector<std::string>& arguments, const fs::path& log) {
+    std::vector<std::string> all{RTD_CLI_PATH};
+    all.insert(all.end(), arguments.begin(), arguments.end());
+    std::vector<char*> argv;
+    for (std::string& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    pid_t pid = -1;
+    if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+    posix_spawn_file_actions_destroy(&actions);
+    return pid;
+}
+
+bool waitUntil(const std::function<bool()>& condition) {
+    for (int i = 0; i < 2000; ++i, std::this_thread::sleep_for(std::chrono::milliseconds(5)))
+        if (condition()) return true;
+    return false;
+}
+
+bool anyNameContains(const fs::path& folder, const std::string& part) {
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(folder, ec))
+        if (contains(entry.path().filename().string(), part)) return true;
+    return false;
+}
+
+// Processes whose command line mentions `text` (the test's folder): an ffmpeg left running.
+int processesMentioning(const std::string& text) {
+    int count = 0;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator("/proc", ec)) {
+        std::ifstream in(entry.path() / "cmdline");
+        const std::string cmdline{std::istreambuf_iterator<char>(in),
+                                  std::istreambuf_iterator<char>()};
+        if (contains(cmdline, text) && !contains(cmdline, "test_cli")) ++count;
+    }
+    return count;
+}
+
+// A sequence long enough to be still running when interrupted, cheaply: one 128x128 frame
+// written, the others links to its files (links to regular files are frames).
+void writeLongSequence(const fs::path& folder, int frames) {
+    test::SceneDescription d;
+    d.width = 128;
+    d.height = 128;
+    d.colour = [](int x, int y) {
+        return std::array<float, 3>{0.01f * (x % 7), 0.5f, 0.1f * (y % 3)};
+    };
+    writeFrame(folder, 0, test::makeFrame(d));
+    for (int i = 1; i < frames; ++i)
+        for (const char* file : {"beauty_", "normal_", "position_", "depth_", "ID_"})
+            fs::create_symlink(std::string(file) + "0.exr",
+                               folder / (file + std::to_string(i) + ".exr"));
+    for (int i = 1; i < frames; ++i)
+        fs::create_symlink("matrix_0.mat", folder / ("matrix_" + std::to_string(i) + ".mat"));
+}
+
+// Defect 4: SIGINT and SIGTERM remove the temporary files, stop ffmpeg and exit 128 + signal.
+TEST(Cli, InterruptRemovesTemporariesAndStopsFfmpeg) {
+    test::TempFolder dir("cli-interrupt");
+    writeLongSequence(dir.path() / "in", 400);
+    struct Case {
+        int signal;
+        bool video;
+    };
+    for (const Case c : {Case{SIGINT, false}, Case{SIGTERM, true}}) {
+        if (c.video && !VideoWriter::ffmpegAvailable()) continue;
+        const fs::path out = dir.path() / ("out-" + std::to_string(c.signal));
+        std::vector<std::string> arguments{"denoise", (dir.path() / "in").string(), "-o",
+                                           out.string(), "--png"};
+        if (c.video) arguments.insert(arguments.end(), {"--video", (out / "v.mp4").string()});
+        const pid_t pid = startCli(arguments, dir.path() / "log.txt");
+        ASSERT_GT(pid, 0);
+        // Running, with files being written (and ffmpeg started): now interrupt it.
+        ASSERT_TRUE(waitUntil([&] {
+            return fs::exists(out / "result_0.exr") &&
+                   (!c.video || anyNameContains(out, ".v.mp4.tmp-"));
+        }));
+        ::kill(pid, c.signal);
+        int status = 0;
+        ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+        ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+        EXPECT_EQ(WEXITSTATUS(status), 128 + c.signal);
+        EXPECT_FALSE(fs::exists(out / "result_399.exr"));  // it was interrupted
+        EXPECT_FALSE(anyNameContains(out, ".tmp-")) << testing::PrintToString(namesIn(out));
+        EXPECT_FALSE(fs::exists(out / "v.mp4"));
+        EXPECT_EQ(processesMentioning(out.string()), 0);  // no ffmpeg left writing
+    }
+}
+
+// Defect 5: options, output paths and every frame's files are checked before the first frame;
+// an up-front failure creates nothing, not even the output folder.
+TEST(Cli, EverythingIsCheckedBeforeTheFirstFrame) {
+    test::TempFolder dir("cli-upfront");
+    const fs::path in = dir.path() / "in", out = dir.path() / "out";
+    writeSequence(in, 3);
+    const auto expectFailureCreatingNothing = [&](const std::string& options,
+                                                  const std::vector<std::string>& parts) {
+        Result r = runCli(denoiseCommand(in, out) + " " + options);
+        EXPECT_NE(r.exitCode, 0) << options;
+        for (const std::string& part : parts) EXPECT_TRUE(contains(r.output, part)) << r.output;
+        EXPECT_FALSE(fs::exists(out)) << options << ": " << r.output;
+    };
+    // A bad option value, named as the option (denoise and compare say the same).
+    expectFailureCreatingNothing("--exposure -1 --png", {"--exposure must be a finite number > 0"});
+    Result compare = runCli("compare " + quoted(in) + " " + quoted(in) + " --exposure -1");
+    EXPECT_TRUE(contains(compare.output, "--exposure must be a finite number > 0"))
+        << compare.output;
+    // A --video path under a regular file.
+    std::ofstream(dir.path() / "file") << "x";
+    if (VideoWriter::ffmpegAvailable())
+        expectFailureCreatingNothing("--video " + quoted(dir.path() / "file" / "v.mp4"),
+                                     {"v.mp4", "is not a folder"});
+    // A G-buffer file of the last frame missing; one of another size; a channel missing.
+    fs::rename(in / "normal_2.exr", dir.path() / "normal_2.exr");
+    expectFailureCreatingNothing("", {(in / "normal_2.exr").string(), "no such file"});
+    writeExr(in / "normal_2.exr", Image(8, 8, 3));
+    expectFailureCreatingNothing("", {(in / "normal_2.exr").string(), "8x8", "beauty_2.exr"});
+    writeExr(in / "normal_2.exr", Image(24, 16, 1));
+    expectFailureCreatingNothing("", {(in / "normal_2.exr").string(), "missing channel"});
+    // A broken .mat of the last frame.
+    fs::rename(dir.path() / "normal_2.exr", in / "normal_2.exr");
+    fs::copy_file(in / "matrix_2.mat", dir.path() / "matrix_2.mat");
+    fs::resize_file(in / "matrix_2.mat", 10);
+    expectFailureCreatingNothing("", {(in / "matrix_2.mat").string()});
+    // --frames 2: frame 2 is not read, so its broken file does not matter.
+    EXPECT_EQ(runCli(denoiseCommand(in, out) + " --frames 2").exitCode, 0);
+    EXPECT_TRUE(fs::exists(out / "result_1.exr"));
+    fs::remove_all(out);
+    fs::copy_file(dir.path() / "matrix_2.mat", in / "matrix_2.mat",
+                  fs::copy_options::overwrite_existing);
+    // An ID outside -1..K-1 needs the pixels: found when frame 1 is read, the run fails naming
+    // the file.
+    Image ids = readExr(in / "ID_1.exr", {{"Y"}});
+    ids.at(3, 2) = 5.0f;
+    writeExr(in / "ID_1.exr", ids);
+    Result r = runCli(denoiseCommand(in, out));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, (in / "ID_1.exr").string())) << r.output;
+    EXPECT_FALSE(fs::exists(out / "result_1.exr"));
+}
+
+// Defect 6: each message names the file or option and says what is wrong.
+TEST(Cli, MessagesSayWhatIsWrong) {
+    test::TempFolder dir("cli-messages");
+    const fs::path in = dir.path() / "in", out = dir.path() / "out";
+    writeSequence(in, 2);
+    std::ofstream(dir.path() / "file") << "x";
+    const std::string underFile = quoted(dir.path() / "file" / "x.json");
+
+    fs::create_directories(dir.path() / "settings");
+    Result r = runCli(denoiseCommand(in, out) + " --config " + quoted(dir.path() / "settings"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, (dir.path() / "settings").string() + ": is a folder"))
+        << r.output;
+
+    r = runCli("compare " + quoted(in) + " " + quoted(in) + " --json " + underFile);
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "'" + (dir.path() / "file").string() + "' is not a folder"))
+        << r.output;
+    r = runCli("bench --size 8x8 --json " + underFile);
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "is not a folder")) << r.output;
+
+    r = runCli(denoiseCommand(in, out) + " --frames -1");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "--frames: -1 is negative")) << r.output;
+    EXPECT_LT(r.output.size(), 200u) << r.output;  // no DBL_MAX written out
+
+    r = runCli("bench --size 99999999999x2");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "the width 99999999999 is out of range 1..16384")) << r.output;
+    EXPECT_FALSE(contains(r.output, "rendering")) << r.output;
+
+    r = runCli("denoize");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "unknown command 'denoize'")) << r.output;
+    EXPECT_TRUE(contains(r.output, "denoise, render, compare, bench")) << r.output;
+    EXPECT_TRUE(contains(r.output, "did you mean 'denoise'?")) << r.output;
+
+    EXPECT_FALSE(fs::exists(out));
+}
+
+// Defect 6: only regular files (or links to them) are frames: a folder or a dangling link of a
+// frame's name is an error naming it, not a frame whose matrix file then seems to be missing.
+TEST(Cli, AFolderOrDanglingLinkIsNotAFrame) {
+    test::TempFolder dir("cli-not-frames");
+    const fs::path in = dir.path() / "in";
+    writeSequence(in, 3);
+    fs::create_directories(in / "beauty_3.exr");
+    Result r = runCli(denoiseCommand(in, dir.path() / "out"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, (in / "beauty_3.exr").string() + ": is a folder")) << r.output;
+    EXPECT_FALSE(contains(r.output, "matrix_3.mat")) << r.output;
+    fs::remove(in / "beauty_3.exr");
+    fs::create_symlink("nowhere.exr", in / "beauty_3.exr");
+    r = runCli(denoiseCommand(in, dir.path() / "out"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, (in / "beauty_3.exr").string() + ": a link to a file that "
+                                                                    "does not exist"))
+        << r.output;
+    fs::remove(in / "beauty_3.exr");
+    fs::remove(in / "depth_1.exr");
+    fs::create_directories(in / "depth_1.exr");
+    r = runCli(denoiseCommand(in, dir.path() / "out"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, (in / "depth_1.exr").string() + ": is a folder")) << r.output;
+    EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
+// Defect 6: the NaN/Inf warning names the frames that had them.
+TEST(Cli, NonFiniteWarningNamesTheFrames) {
+    test::TempFolder dir("cli-nan");
+    const fs::path in = dir.path() / "in";
+    writeSequence(in, 3);
+    Image beauty = readExr(in / "beauty_1.exr", {{"R"}, {"G"}, {"B"}});
+    beauty.at(2, 3, 0) = std::nanf("");
+    beauty.at(5, 1, 2) = INFINITY;
+    writeExr(in / "beauty_1.exr", beauty);
+    Result r = runCli(denoiseCommand(in, dir.path() / "out"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "warning: frame 1: ")) << r.output;
+    EXPECT_TRUE(contains(r.output, "NaN/Inf radiance values replaced by 0")) << r.output;
 }
 
 }  // namespace

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "io/atomic_file.h"
 #include "rtdenoise/error.h"
 #include "rtdenoise/image.h"
 #include "rtdenoise/io.h"
@@ -325,6 +326,59 @@ TEST(Exr, WriteIntoMissingFolderFailsCleanly) {
 
 // ---- .mat ----
 
+// A header that claims a huge image fails naming the file and the claimed size, before
+// anything is allocated for it (it used to end in std::bad_alloc).
+TEST(Exr, HeaderClaimingAHugeImageNamesTheClaimedSize) {
+    TempDir dir;
+    const fs::path file = dir / "huge.exr";
+    rtd::writeExr(file, patternImage(8, 8, 3, 0.0f));
+    std::string bytes = readBytes(file);
+    // dataWindow: name, type "box2i", int32 size 16, then xMin yMin xMax yMax.
+    const std::string attribute("dataWindow\0box2i\0", 17);
+    const std::size_t at = bytes.find(attribute);
+    ASSERT_NE(at, std::string::npos);
+    const auto claim = [&](std::uint32_t width, std::uint32_t height) {
+        std::string patched = bytes;
+        std::string box;
+        for (std::uint32_t v : {0u, 0u, width - 1, height - 1}) appendLe32(box, v);
+        patched.replace(at + attribute.size() + 4, 16, box);
+        writeBytes(file, patched);
+    };
+    claim(100000, 100000);
+    expectError([&] { rtd::readExr(file, kRgb); }, ErrorCode::InvalidInput,
+                {file.string(), "claims a 100000x100000 image"});
+    expectError([&] { rtd::readExrSize(file, kRgb); }, ErrorCode::InvalidInput,
+                {file.string(), "100000x100000"});
+    // Under the maximum, but more blocks than the file has room for.
+    claim(4000, 4000);
+    expectError([&] { rtd::readExr(file, kRgb); }, ErrorCode::InvalidInput,
+                {file.string(), "claims a 4000x4000 image", "truncated or corrupt"});
+    claim(8, 8);
+    EXPECT_EQ(rtd::readExrSize(file, kRgb).width, 8);
+}
+
+// A signal handler's clean-up: every live temporary file goes, and an unfinished video's
+// ffmpeg is killed (no process left writing into the folder).
+TEST(Exr, AbandonTemporaryFilesRemovesLiveTemporaries) {
+    TempDir dir;
+    const fs::path kept = dir / "kept.exr";
+    rtd::writeExr(kept, patternImage(4, 4, 3, 0.0f));  // committed: no longer a temporary
+    {
+        rtd::io_detail::TemporaryFile temporary(dir / ".x.exr.tmp-1-1");
+        writeBytes(temporary.path(), "partial");
+        rtd::abandonTemporaryFiles();
+        EXPECT_FALSE(fs::exists(temporary.path()));
+    }
+    EXPECT_TRUE(fs::exists(kept));
+    if (!rtd::VideoWriter::ffmpegAvailable()) return;
+    rtd::VideoWriter writer(dir / "v.mp4", 64, 64);
+    writer.addFrame(Image(64, 64, 3, 0.5f));
+    rtd::abandonTemporaryFiles();
+    EXPECT_EQ(dir.names(), std::vector<std::string>{"kept.exr"});
+    expectError([&] { writer.finish(); }, ErrorCode::IoFailure, {(dir / "v.mp4").string()});
+    EXPECT_FALSE(fs::exists(dir / "v.mp4"));
+}
+
 TEST(Matrix, RoundTrip) {
     TempDir dir;
     writeMat(dir / "m.mat", 3);
@@ -463,6 +517,67 @@ TEST(Sequence, MissingBufferNamesTheFile) {
     fs::remove(dir / "matrix_0.mat");
     expectError([&] { sequence.readFrame(0); }, ErrorCode::MissingFile,
                 {(dir / "matrix_0.mat").string()});
+}
+
+// Every frame's files checked from their headers (and .mat files) before any frame is read.
+TEST(Sequence, CheckFramesFindsBadFilesOfEveryFrame) {
+    TempDir dir;
+    writeSequence(dir.path(), 3, 5, 4, 2);
+    const rtd::Sequence sequence(dir.path());
+    const std::vector<rtd::ExrSize> sizes = sequence.checkFrames(3);
+    ASSERT_EQ(sizes.size(), 3u);
+    EXPECT_EQ(sizes[2].width, 5);
+    EXPECT_EQ(sizes[2].height, 4);
+
+    rtd::writeExr(dir / "position_2.exr", patternImage(4, 4, 3, 0.0f));
+    expectError([&] { sequence.checkFrames(3); }, ErrorCode::InvalidInput,
+                {(dir / "position_2.exr").string(), "4x4", (dir / "beauty_2.exr").string()});
+    EXPECT_NO_THROW(sequence.checkFrames(2));  // --frames 2: frame 2 is not needed
+    fs::remove(dir / "position_2.exr");
+    expectError([&] { sequence.checkFrames(3); }, ErrorCode::MissingFile,
+                {(dir / "position_2.exr").string()});
+    fs::create_directories(dir / "position_2.exr");
+    expectError([&] { sequence.checkFrames(3); }, ErrorCode::InvalidInput,
+                {(dir / "position_2.exr").string(), "is a folder"});
+    fs::remove(dir / "position_2.exr");
+    rtd::writeExr(dir / "position_2.exr", patternImage(5, 4, 3, 0.0f));
+    fs::create_symlink("nowhere.exr", dir / "albedo_1.exr");  // optional, but broken
+    expectError([&] { sequence.checkFrames(3); }, ErrorCode::MissingFile,
+                {(dir / "albedo_1.exr").string(), "link to a file that does not exist"});
+    fs::remove(dir / "albedo_1.exr");
+    writeBytes(dir / "matrix_1.mat", "abc");
+    expectError([&] { sequence.checkFrames(3); }, ErrorCode::InvalidInput,
+                {(dir / "matrix_1.mat").string()});
+}
+
+// A folder or a dangling link of a frame's name is named as such, not counted as a frame.
+TEST(Sequence, OnlyRegularFilesAreFrames) {
+    TempDir dir;
+    writeSequence(dir.path(), 2, 3, 3, 1);
+    fs::create_symlink("beauty_0.exr", dir / "beauty_2.exr");  // a link to a file: a frame
+    EXPECT_EQ(rtd::countFrames(dir.path(), "beauty"), 3);
+    fs::remove(dir / "beauty_2.exr");
+    fs::create_directories(dir / "beauty_2.exr");
+    expectError([&] { rtd::Sequence s(dir.path()); }, ErrorCode::InvalidInput,
+                {(dir / "beauty_2.exr").string(), "is a folder"});
+    fs::remove(dir / "beauty_2.exr");
+    fs::create_symlink("gone.exr", dir / "beauty_2.exr");
+    expectError([&] { rtd::Sequence s(dir.path()); }, ErrorCode::MissingFile,
+                {(dir / "beauty_2.exr").string(), "link to a file that does not exist"});
+}
+
+TEST(Sequence, RemoveNumberedFilesRemovesOnlyThoseFiles) {
+    TempDir dir;
+    for (const char* name : {"result_0.exr", "result_1.exr", "result_2.exr", "result_1.png",
+                             "result_01.exr", "result_2.exr.bak", "other_2.exr"})
+        writeBytes(dir / name, "x");
+    fs::create_directories(dir / "result_3.exr");
+    rtd::removeNumberedFiles(dir.path(), "result", ".exr", 1);
+    EXPECT_EQ(dir.names(),
+              (std::vector<std::string>{"other_2.exr", "result_0.exr", "result_01.exr",
+                                        "result_1.png", "result_2.exr.bak", "result_3.exr"}));
+    rtd::removeNumberedFiles(dir.path(), "result", ".png", 0);
+    EXPECT_FALSE(fs::exists(dir / "result_1.png"));
 }
 
 TEST(Sequence, SizeMismatchNamesBothFiles) {

@@ -253,6 +253,9 @@ int runCompare(const CompareOptions& options) {
         throw Error(
             ErrorCode::InvalidArgument,
             fmt::format("--exposure must be a finite number > 0, got {}", options.exposure));
+    // A bad --json/--csv path fails now, not after the whole sequence was read.
+    for (const fs::path& file : {options.json, options.csv})
+        if (!file.empty()) checkOutputFile(file);
     requireFolder(options.results, "RESULT_DIR");
     requireFolder(options.references, "REFERENCE_DIR");
     // Both sets counted (each numbered 0..N-1) and matched up front, before minutes of 4K reading.
@@ -261,10 +264,6 @@ int runCompare(const CompareOptions& options) {
                        countFrames(options.references, "reference"));
     const int frameCount = static_cast<int>(compared.size());
     std::error_code ec;
-
-    // A bad --json/--csv path fails now, not after the whole sequence was read.
-    for (const fs::path& file : {options.json, options.csv})
-        if (!file.empty()) checkOutputFile(file);
 
     const bool sheets = !options.images.empty();
     std::vector<int> chosen;

@@ -35,6 +35,10 @@ int registerTemporary(const std::filesystem::path& path) noexcept;
 void unregisterTemporary(int slot) noexcept;
 void registerChild(pid_t child) noexcept;
 void unregisterChild(pid_t child) noexcept;
+// Around starting a child and registering it, with SIGINT/SIGTERM blocked in that thread: the
+// clean-up then waits for the registration instead of missing a child started a moment ago.
+void beginChildSpawn() noexcept;
+void endChildSpawn() noexcept;
 // Kills and reaps the registered children, then unlinks the registered files. Async-signal-safe.
 void removeLiveTemporaries() noexcept;
 

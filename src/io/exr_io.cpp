@@ -5,13 +5,16 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStdIO.h>
 #include <ImfThreading.h>
 #include <ImfTileDescription.h>
+#include <ImfVersion.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <exception>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -106,6 +109,32 @@ ExrSize checkedSize(const std::filesystem::path& file, const Imf::Header& header
     return {int(width), int(height)};
 }
 
+// The size claimed by the file's header, checked (checkedSize) before OpenEXR's InputFile reads
+// the block offset table it sizes from it: for a hostile header that read fails with "early end
+// of file", or allocates as claimed, either way saying nothing of the size. A file that is not a
+// readable EXR header is left for InputFile to report.
+void checkClaimedSize(const std::filesystem::path& file) {
+    std::optional<Imf::Header> header;
+    try {
+        Imf::StdIFStream stream(file.c_str());
+        char start[8];
+        stream.read(start, sizeof start);
+        const auto le32 = [&start](int at) {
+            return std::int32_t(std::uint32_t(std::uint8_t(start[at])) |
+                                std::uint32_t(std::uint8_t(start[at + 1])) << 8 |
+                                std::uint32_t(std::uint8_t(start[at + 2])) << 16 |
+                                std::uint32_t(std::uint8_t(start[at + 3])) << 24);
+        };
+        if (le32(0) != Imf::MAGIC) return;
+        int version = le32(4);
+        header.emplace();
+        header->readFrom(stream, version);
+    } catch (const std::exception&) {
+        return;
+    }
+    checkedSize(file, *header);
+}
+
 // The file channel chosen for each entry of `channelChoices` (first match wins); throws
 // InvalidInput naming the file for a missing or subsampled channel.
 std::vector<std::string> chooseChannels(
@@ -162,6 +191,7 @@ void requireReadableFile(const std::filesystem::path& file,
 ExrSize readExrSize(const std::filesystem::path& file,
                     const std::vector<std::vector<std::string>>& channelChoices) {
     requireReadableFile(file, channelChoices);
+    checkClaimedSize(file);
     try {
         Imf::InputFile input(file.c_str(), 0);
         chooseChannels(file, input.header().channels(), channelChoices);
@@ -180,6 +210,7 @@ void setExrThreads(int count) {
 Image readExr(const std::filesystem::path& file,
               const std::vector<std::vector<std::string>>& channelChoices) {
     requireReadableFile(file, channelChoices);
+    checkClaimedSize(file);
     try {
         Imf::InputFile input(file.c_str(), Imf::globalThreadCount());
         const Imf::Header& header = input.header();

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 
 #include "io/atomic_file.h"
@@ -30,6 +31,7 @@ struct Slot {
 
 Slot temporaries[kSlots];
 std::atomic<pid_t> children[4];
+std::atomic<int> spawning{0};  // children being started, not registered yet
 
 static_assert(std::atomic<int>::is_always_lock_free && std::atomic<pid_t>::is_always_lock_free,
               "the signal handler reads the registry: its atomics must not take locks");
@@ -67,7 +69,21 @@ void unregisterChild(pid_t child) noexcept {
     }
 }
 
+void beginChildSpawn() noexcept {
+    spawning.fetch_add(1);
+}
+
+void endChildSpawn() noexcept {
+    spawning.fetch_sub(1);
+}
+
 void removeLiveTemporaries() noexcept {
+    // A child being started is registered within microseconds by a thread that has these signals
+    // blocked (so it is not this one): wait for it, up to a second, rather than leave it running.
+    for (int wait = 0; spawning.load() > 0 && wait < 1000; ++wait) {
+        const timespec millisecond{0, 1000000};
+        ::nanosleep(&millisecond, nullptr);
+    }
     // The children first: a killed ffmpeg writes no more into the file about to be unlinked.
     for (auto& entry : children) {
         const pid_t child = entry.exchange(0);

@@ -108,8 +108,24 @@ std::FILE* spawnWithPipe(const std::vector<std::string>& arguments,
     for (const std::string& argument : arguments)
         argv.push_back(const_cast<char*>(argument.c_str()));
     argv.push_back(nullptr);
+    // An interrupt between the start and the registration would miss the child: this thread
+    // takes none meanwhile, and the clean-up in another one waits for the registration.
+    sigset_t interrupts, previous;
+    sigemptyset(&interrupts);
+    sigaddset(&interrupts, SIGINT);
+    sigaddset(&interrupts, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &interrupts, &previous);
+    io_detail::beginChildSpawn();
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    posix_spawnattr_setsigmask(&attributes, &previous);  // the child takes signals as we did
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK);
     std::fflush(nullptr);  // nothing buffered twice
-    const int failed = ::posix_spawnp(&child, argv[0], &actions, nullptr, argv.data(), environ);
+    const int failed = ::posix_spawnp(&child, argv[0], &actions, &attributes, argv.data(), environ);
+    if (failed == 0) io_detail::registerChild(child);
+    io_detail::endChildSpawn();
+    pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+    posix_spawnattr_destroy(&attributes);
     posix_spawn_file_actions_destroy(&actions);
     ::close(ends[0]);
     if (failed != 0) {
@@ -117,7 +133,6 @@ std::FILE* spawnWithPipe(const std::vector<std::string>& arguments,
         throw Error(ErrorCode::IoFailure,
                     file.string() + ": cannot start ffmpeg: " + std::strerror(failed));
     }
-    io_detail::registerChild(child);
     std::FILE* pipe = ::fdopen(ends[1], "w");
     if (!pipe) {
         ::close(ends[1]);
