@@ -310,6 +310,16 @@ TEST(Cli, CompareRefusesSetsOfDifferentLengths) {
     r = runCli("compare " + quoted(results) + " " + quoted(references) + " --frames 0..2");
     EXPECT_NE(r.exitCode, 0);
     EXPECT_TRUE(contains(r.output, "frame 2 is outside 0..1")) << r.output;
+    // Contact sheets: --sheets chooses among the frames compared.
+    r = runCli("compare " + quoted(results) + " " + quoted(references) + " --frames 0..1 -q" +
+               " --images " + quoted(dir.path() / "png") + " --sheets 1");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(namesIn(dir.path() / "png"), std::vector<std::string>{"contact_1.png"});
+    r = runCli("compare " + quoted(results) + " " + quoted(references) + " --frames 1 --images " +
+               quoted(dir.path() / "png") + " --sheets 0");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "--sheets: frame 0 is not among the frames compared"))
+        << r.output;
 }
 
 // Starts the command without a shell (a signal must reach it, not sh), its output into `log`.
