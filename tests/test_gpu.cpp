@@ -88,6 +88,43 @@ TEST(Gpu, CpuAndCudaAgreeOnTheCourseScene) {
     expectBackEndsAgree(frames, "box");
 }
 
+// Bad values a renderer writes (test_bad_values: radiance near the float maximum, zero,
+// non-finite and short normals): the GPU's result is finite, counts what the CPU counts, and
+// agrees with the CPU's, with the tile passes on and off.
+TEST(Gpu, CudaHandlesBadValuesAsTheCpuDoes) {
+    std::string reason = cudaUnavailableReason();
+    if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 64, 48, 4);
+    for (Frame& f : frames) {
+        f.beauty.at(10, 10, 0) = 3.4e38f;
+        f.beauty.at(40, 30, 1) = 1e20f;
+        for (int y = 20; y < 28; ++y)
+            for (int x = 20; x < 28; ++x)
+                for (int c = 0; c < 3; ++c) f.normal.at(x, y, c) = 0.0f;
+        f.normal.at(50, 12, 0) = NAN;
+        for (float& v : f.normal.pixels) v *= 0.8f;
+    }
+    for (TilePasses tiles : {TilePasses::On, TilePasses::Off}) {
+        for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf}) {
+            DenoiserSettings s;
+            s.method = method;
+            s.device = DeviceType::Cpu;
+            Denoiser cpu(s);
+            s.device = DeviceType::Cuda;
+            s.tilePasses = tiles;
+            Denoiser gpu(s);
+            for (std::size_t i = 0; i < frames.size(); ++i) {
+                Image a = cpu.processFrame(frames[i]), b = gpu.processFrame(frames[i]);
+                for (float v : b.pixels) ASSERT_TRUE(std::isfinite(v)) << toString(method);
+                EXPECT_EQ(gpu.lastFrameStats().radianceClamped, 2);
+                EXPECT_EQ(gpu.lastFrameStats().missingNormals, cpu.lastFrameStats().missingNormals);
+                EXPECT_LE(test::maxRelativeDifference(a, b), 1e-3)
+                    << toString(method) << ", frame " << i;
+            }
+        }
+    }
+}
+
 #if RTD_TEST_CUDA
 // A renderer's G-buffer already on the GPU: device pointers in, a device pointer out. Gives what
 // the host path gives, and a bad object ID there is refused too (it is checked on the device).
