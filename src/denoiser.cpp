@@ -153,7 +153,7 @@ struct Denoiser::Impl {
                 depth[current].data(),
                 objectId[current].data(),
                 {normalDepth[current].data()},
-                settings.edges.separateObjects ? objectId[current].data() : filterKeys.data()};
+                filterKeys.data()};
     }
     PreviousGeometry previousGeometry() const {
         return {objectId[previous()].data(),
@@ -281,7 +281,7 @@ struct Denoiser::Impl {
             return ids;
         };
         for (auto& ids : objectId) ids = idPlane();
-        if (!settings.edges.separateObjects) filterKeys = idPlane();
+        filterKeys = idPlane();
         inputFlags = DeviceBuffer<std::uint8_t>(d, n);
         validity = DeviceBuffer<std::uint8_t>(d, padded);
         d.fill(validity.data(), kReprojectionNoHistory, validity.bytes());
@@ -631,13 +631,9 @@ struct Denoiser::Impl {
     void buildPipeline() {
         padding = std::max(settings.outlier.enabled ? settings.outlier.radius : 0,
                            settings.method == Method::Temporal ? settings.temporal.clampRadius : 0);
-        std::vector<std::string> ingested = {"noisy",    "albedo", "normal",
-                                             "position", "depth",  "objectId"};
+        std::vector<std::string> ingested = {"noisy", "albedo",   "normal",    "position",
+                                             "depth", "objectId", "filterKeys"};
         addPass("ingest", {"frame"}, ingested, [this] { ingest(); });
-        if (!settings.edges.separateObjects)
-            addPass("filter-keys", {"objectId"}, {"filterKeys"}, [this] {
-                launch(FilterKeysKernel{layout, objectId[current].data(), filterKeys.data()});
-            });
         DeviceBuffer<float>* in = &noisy;
         std::string inName = "noisy";
         if (settings.outlier.enabled) {
@@ -703,7 +699,9 @@ struct Denoiser::Impl {
                           depth[current].data(),
                           objectId[current].data(),
                           inputFlags.data(),
-                          {normalDepth[current].data()}});
+                          {normalDepth[current].data()},
+                          filterKeys.data(),
+                          settings.edges.separateObjects ? 1 : 0});
         };
         if (interleavedGuide)
             run.template operator()<IngestInterleavedKernel>();

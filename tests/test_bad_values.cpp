@@ -68,19 +68,24 @@ TEST(BadValues, HugeFiniteRadianceGivesAFiniteResult) {
     for (float huge : {FLT_MAX, 3.4e38f, 3.0e38f, 1e30f, 1e19f}) {
         for (CpuIsa isa : {CpuIsa::Scalar, CpuIsa::Auto}) {
             for (Method method : kEveryMethod) {
-                Denoiser denoiser(settingsFor(method, isa));
-                for (int frame = 0; frame < 3; ++frame) {
-                    Frame f = makeFrame(texturedScene());
-                    test::addNoise(f, 0.1f, unsigned(frame));
-                    f.beauty.at(10, 10, 0) = huge;
-                    f.beauty.at(20, 12, 1) = huge;  // on the other object
-                    f.beauty.at(5, 0, 2) = huge;    // background
-                    Image out = denoiser.processFrame(f);
-                    ASSERT_EQ(nonFiniteCount(out), 0u) << huge << " " << toString(method) << " "
-                                                       << toString(isa) << " frame " << frame;
-                    EXPECT_EQ(denoiser.lastFrameStats().radianceClamped,
-                              huge > kMaxRadiance ? 3 : 0)
-                        << huge << " " << toString(method);
+                for (bool outlier : {true, false}) {
+                    DenoiserSettings s = settingsFor(method, isa);
+                    s.outlier.enabled = outlier;
+                    Denoiser denoiser(s);
+                    for (int frame = 0; frame < 3; ++frame) {
+                        Frame f = makeFrame(texturedScene());
+                        test::addNoise(f, 0.1f, unsigned(frame));
+                        for (int c = 0; c < 3; ++c) f.beauty.at(10, 10, c) = huge;
+                        f.beauty.at(20, 12, 1) = huge;  // on the other object, one channel
+                        f.beauty.at(5, 0, 2) = huge;    // background
+                        Image out = denoiser.processFrame(f);
+                        ASSERT_EQ(nonFiniteCount(out), 0u)
+                            << huge << " " << toString(method) << " " << toString(isa)
+                            << (outlier ? "" : " without firefly removal") << ", frame " << frame;
+                        EXPECT_EQ(denoiser.lastFrameStats().radianceClamped,
+                                  huge > kMaxRadiance ? 5 : 0)
+                            << huge << " " << toString(method);
+                    }
                 }
             }
         }
@@ -156,8 +161,9 @@ TEST(BadValues, UnnormalisedNormalsGiveTheUnitNormalsResult) {
     }
 }
 
-// Zero normals (emitters, hair, volumes) and non-finite ones on object pixels: their normal term
-// is neutral, so they are filtered (not kept noisy), never darkened, and counted.
+// Zero normals (emitters, hair, volumes) and non-finite ones on object pixels: they are filtered
+// among themselves with a neutral normal term (not kept noisy), never darkened, and counted; the
+// pixels with a normal around them do not take them in.
 TEST(BadValues, ZeroOrNonFiniteNormalsDoNotDarkenAndAreCounted) {
     for (Method method : kEveryMethod) {
         Denoiser clean(settingsFor(method)), broken(settingsFor(method));
@@ -177,8 +183,9 @@ TEST(BadValues, ZeroOrNonFiniteNormalsDoNotDarkenAndAreCounted) {
             const double result = meanOver(out, 4, 6, 12, 14);
             EXPECT_NEAR(result, input, 0.05 * input) << toString(method) << " frame " << frame;
             EXPECT_NEAR(result, meanOver(expected, 4, 6, 12, 14), 0.05 * input) << toString(method);
+            // Lone pixels without a normal filter among themselves (here: the two of them).
             for (int x : {24, 25})
-                EXPECT_NEAR(out.at(x, 10, 1), expected.at(x, 10, 1), 0.15f) << toString(method);
+                EXPECT_GT(out.at(x, 10, 1), 0.5f * expected.at(x, 10, 1)) << toString(method);
             // Filtered, not passed through: the block is smoother than the noisy input.
             double inputSpread = 0.0, resultSpread = 0.0;
             for (int y = 7; y < 13; ++y)

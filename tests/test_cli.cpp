@@ -551,5 +551,32 @@ TEST(Cli, NonFiniteWarningNamesTheFrames) {
     EXPECT_TRUE(contains(r.output, "NaN/Inf radiance values replaced by 0")) << r.output;
 }
 
+// What the ingest clamps (radiance beyond kMaxRadiance) and the object pixels it takes without a
+// normal are reported per frame, and the result is finite.
+TEST(Cli, ClampedRadianceAndMissingNormalsAreReported) {
+    test::TempFolder dir("cli-clamp");
+    const fs::path in = dir.path() / "in";
+    writeSequence(in, 3);
+    Image beauty = readExr(in / "beauty_2.exr", {{"R"}, {"G"}, {"B"}});
+    for (int c = 0; c < 3; ++c) beauty.at(12, 8, c) = 3.4e38f;
+    writeExr(in / "beauty_2.exr", beauty);
+    Image normal = readExr(in / "normal_0.exr", {{"R"}, {"G"}, {"B"}});
+    for (int x = 0; x < 4; ++x)
+        for (int c = 0; c < 3; ++c) normal.at(x, 5, c) = 0.0f;
+    writeExr(in / "normal_0.exr", normal);
+    Result r = runCli(denoiseCommand(in, dir.path() / "out"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "warning: frame 2: 3 radiance values beyond +-1e+16 clamped"))
+        << r.output;
+    EXPECT_TRUE(
+        contains(r.output, "warning: frame 0: 4 object pixels with a zero or NaN/Inf normal"))
+        << r.output;
+    for (int i = 0; i < 3; ++i) {
+        Image out = readExr(dir.path() / "out" / ("result_" + std::to_string(i) + ".exr"),
+                            {{"R"}, {"G"}, {"B"}});
+        for (float v : out.pixels) ASSERT_TRUE(std::isfinite(v)) << i;
+    }
+}
+
 }  // namespace
 }  // namespace rtd

@@ -432,7 +432,7 @@ TEST(SvgfKernels, InterleavingIngestWritesThePlanarIngestsNormalAndDepth) {
     ids[30] = -1;
     struct Out {
         DeviceBuffer<float> noisy, albedo, normal, position, depth, guide;
-        DeviceBuffer<std::int32_t> ids;
+        DeviceBuffer<std::int32_t> ids, keys;
         std::vector<std::uint8_t> flags;
     };
     auto outputs = [&] {
@@ -442,6 +442,7 @@ TEST(SvgfKernels, InterleavingIngestWritesThePlanarIngestsNormalAndDepth) {
               hs.buffer(3),
               hs.buffer(1),
               hs.buffer(4),
+              DeviceBuffer<std::int32_t>(*hs.device, std::size_t(hs.layout.planeSize)),
               DeviceBuffer<std::int32_t>(*hs.device, std::size_t(hs.layout.planeSize)),
               std::vector<std::uint8_t>(n)};
         for (int i = 0; i < hs.layout.planeSize; ++i) {
@@ -467,7 +468,8 @@ TEST(SvgfKernels, InterleavingIngestWritesThePlanarIngestsNormalAndDepth) {
                                  o.depth.data(),
                                  o.ids.data(),
                                  o.flags.data(),
-                                 {o.guide.data()}},
+                                 {o.guide.data()},
+                                 o.keys.data()},
                           w, h);
     };
     Out planar = outputs(), packed = outputs();
@@ -490,6 +492,11 @@ TEST(SvgfKernels, InterleavingIngestWritesThePlanarIngestsNormalAndDepth) {
             EXPECT_EQ(hs.planes(packed.normal).load(i).y, -7.0f);  // planes untouched
             EXPECT_EQ(packed.depth.data()[i], -7.0f);
             EXPECT_EQ(packed.ids.data()[i], planar.ids.data()[i]);
+            EXPECT_EQ(packed.keys.data()[i], planar.keys.data()[i]);
+            // The NaN normal's pixel keeps its object, keyed as one without a normal.
+            EXPECT_EQ(planar.keys.data()[i], y * w + x == 10 ? kWithoutNormalKey
+                                             : y * w + x == 20 || y * w + x == 30 ? -1
+                                                                                  : 0);
             for (int k = 0; k < 3; ++k) {
                 EXPECT_EQ(hs.planeSet(packed.noisy).at(k, i), hs.planeSet(planar.noisy).at(k, i));
                 EXPECT_EQ(hs.planeSet(packed.position).at(k, i),

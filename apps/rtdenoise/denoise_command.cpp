@@ -129,11 +129,14 @@ void removeEarlierOutputs(const DenoiseOptions& options, const DenoiserSettings&
     removeNumberedFiles(options.output, "history", ".png", keep(options.debug && svgfViews));
 }
 
-// "frame 3: 12 NaN/Inf radiance values replaced by 0", or the total and the frames.
-std::string nonFiniteWarning(const std::vector<std::pair<int, long long>>& perFrame) {
+// What the ingest repaired, per frame: (frame, count) where the count is not 0.
+using FrameCounts = std::vector<std::pair<int, long long>>;
+
+// "frame 3: 12 <what>" (what: "NaN/Inf radiance values replaced by 0"), or the total and the
+// frames.
+std::string inputWarning(const FrameCounts& perFrame, const std::string& what) {
     if (perFrame.size() == 1)
-        return fmt::format("frame {}: {} NaN/Inf radiance values replaced by 0", perFrame[0].first,
-                           perFrame[0].second);
+        return fmt::format("frame {}: {} {}", perFrame[0].first, perFrame[0].second, what);
     long long total = 0;
     std::string frames;
     constexpr std::size_t kListed = 10;
@@ -144,8 +147,7 @@ std::string nonFiniteWarning(const std::vector<std::pair<int, long long>>& perFr
                 fmt::format("{}frame {}: {}", i ? ", " : "", perFrame[i].first, perFrame[i].second);
     }
     if (perFrame.size() > kListed) frames += ", ...";
-    return fmt::format("{} NaN/Inf radiance values replaced by 0 in {} frames ({})", total,
-                       perFrame.size(), frames);
+    return fmt::format("{} {} in {} frames ({})", total, what, perFrame.size(), frames);
 }
 
 int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) {
@@ -184,7 +186,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     using Clock = std::chrono::steady_clock;
     std::vector<std::vector<double>> passTimes(denoiser.passes().size());
     std::vector<double> frameTimes, readWaitTimes, writeTimes;
-    std::vector<std::pair<int, long long>> nonFinite;  // (frame, values replaced)
+    FrameCounts nonFinite, clamped, missingNormals;
     auto start = Clock::now();
 
     // Frame i+1 is read on another thread while frame i is denoised.
@@ -232,6 +234,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         for (std::size_t p = 0; p < passTimes.size(); ++p)
             passTimes[p].push_back(stats.passMilliseconds[p]);
         if (stats.nonFiniteReplaced > 0) nonFinite.emplace_back(i, stats.nonFiniteReplaced);
+        if (stats.radianceClamped > 0) clamped.emplace_back(i, stats.radianceClamped);
+        if (stats.missingNormals > 0) missingNormals.emplace_back(i, stats.missingNormals);
 
         std::vector<std::pair<std::string, Image>> debug;
         if (options.debug &&
@@ -253,7 +257,17 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     double total = std::chrono::duration<double>(Clock::now() - start).count();
 
     if (!nonFinite.empty())
-        fmt::print(stderr, "rtdenoise: warning: {}\n", nonFiniteWarning(nonFinite));
+        fmt::print(stderr, "rtdenoise: warning: {}\n",
+                   inputWarning(nonFinite, "NaN/Inf radiance values replaced by 0"));
+    if (!clamped.empty())
+        fmt::print(stderr, "rtdenoise: warning: {}\n",
+                   inputWarning(clamped, fmt::format("radiance values beyond +-{:g} clamped to it",
+                                                     kMaxRadiance)));
+    if (!missingNormals.empty())
+        fmt::print(stderr, "rtdenoise: warning: {}\n",
+                   inputWarning(missingNormals,
+                                "object pixels with a zero or NaN/Inf normal (filtered among "
+                                "themselves, without a normal term)"));
     if (!options.quiet) {
         fmt::print("{} frames of {}x{} in {:.2f} s ({:.1f} fps overall, I/O included)\n", frames,
                    result.width, result.height, total, frames / total);
@@ -327,16 +341,16 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     addTilePassesOption(c, s.tilePasses,
                         "Firefly removal (and svgf's clamp-window row sums) as one tile pass (on) "
                         "or separate passes (off); the same result (auto: the device's choice)");
-    c.add_option("--sigma-color", s.edges.sigmaColor, "[>0] colour edge-stopping sigma")
+    c.add_option("--sigma-color", s.edges.sigmaColor, "[>=1e-6] colour edge-stopping sigma")
         ->capture_default_str();
     c.add_option("--sigma-normal", s.edges.sigmaNormal,
-                 "[>0] normal-angle edge-stopping sigma (radians)")
+                 "[>=1e-6] normal-angle edge-stopping sigma (radians)")
         ->capture_default_str();
-    c.add_option("--sigma-plane", s.edges.sigmaPlane, "[>0] plane-distance edge-stopping sigma")
+    c.add_option("--sigma-plane", s.edges.sigmaPlane, "[>=1e-6] plane-distance edge-stopping sigma")
         ->capture_default_str();
     c.add_flag("--separate-objects,!--no-separate-objects", s.edges.separateObjects,
                "Pixels of another object ID never contribute to a filtered pixel (on by default)");
-    c.add_option("--sigma-coord", s.jbf.sigmaCoord, "[>0] JBF spatial sigma (pixels)")
+    c.add_option("--sigma-coord", s.jbf.sigmaCoord, "[>=1e-6] JBF spatial sigma (pixels)")
         ->capture_default_str();
     c.add_option("--radius", s.jbf.radius, "[0,64] JBF kernel half width")->capture_default_str();
     c.add_option("--atrous-passes", s.atrous.passes, "[1,10] A-Trous levels (stride 2^i)")
@@ -361,12 +375,13 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     c.add_option("--svgf-moments-alpha", s.svgf.momentsAlpha,
                  "[0,1] svgf luminance moments: current-frame weight floor")
         ->capture_default_str();
-    c.add_option("--svgf-sigma-depth", s.svgf.sigmaDepth, "[>0] svgf depth tolerance (sigma_z)")
+    c.add_option("--svgf-sigma-depth", s.svgf.sigmaDepth, "[>=1e-6] svgf depth tolerance (sigma_z)")
         ->capture_default_str();
-    c.add_option("--svgf-sigma-normal", s.svgf.sigmaNormal, "[>0] svgf normal exponent (sigma_n)")
+    c.add_option("--svgf-sigma-normal", s.svgf.sigmaNormal,
+                 "[>=1e-6] svgf normal exponent (sigma_n)")
         ->capture_default_str();
     c.add_option("--svgf-sigma-luminance", s.svgf.sigmaLuminance,
-                 "[>0] svgf luminance tolerance in standard deviations (sigma_l)")
+                 "[>=1e-6] svgf luminance tolerance in standard deviations (sigma_l)")
         ->capture_default_str();
     c.add_option("--svgf-iterations", s.svgf.iterations, "[1,10] svgf A-Trous iterations")
         ->capture_default_str();

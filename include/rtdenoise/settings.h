@@ -36,16 +36,19 @@ enum class TilePasses { Auto, On, Off };
 
 // Edge-stopping terms shared by the JBF and the A-Trous filter.
 struct EdgeStoppingSettings {
-    float sigmaColor = 0.6f;   // [>0] colour distance (RGB, linear) at which weight falls to e^-0.5
-    float sigmaNormal = 0.1f;  // [>0] angle between normals (radians), D_normal = acos(n_i . n_j)
-    float sigmaPlane = 0.1f;   // [>0] D_plane = n_i . (p_j - p_i) / |p_j - p_i|
+    float sigmaColor =
+        0.6f;  // [>=kMinSigma] colour distance (RGB, linear) at which weight falls to e^-0.5
+    float sigmaNormal =
+        0.1f;  // [>=kMinSigma] angle between normals (radians), D_normal = acos(n_i . n_j)
+    float sigmaPlane = 0.1f;      // [>=kMinSigma] D_plane = n_i . (p_j - p_i) / |p_j - p_i|
     bool separateObjects = true;  // pixels of another object ID never contribute (an edge the
                                   // geometry terms alone can miss: touching coplanar objects)
 };
 
 struct JbfSettings {
-    int radius = 16;           // [0, 64] half width of the square kernel: (2r+1)^2 taps
-    float sigmaCoord = 32.0f;  // [>0] pixel distance at which the spatial weight falls to e^-0.5
+    int radius = 16;  // [0, 64] half width of the square kernel: (2r+1)^2 taps
+    float sigmaCoord =
+        32.0f;  // [>=kMinSigma] pixel distance at which the spatial weight falls to e^-0.5
 };
 
 struct AtrousSettings {
@@ -68,9 +71,9 @@ struct HistorySettings {
 struct SvgfSettings {
     float alpha = 0.2f;           // [0, 1] colour: weight of the current frame, at least 1/history
     float momentsAlpha = 0.2f;    // [0, 1] the same for the luminance moments
-    float sigmaDepth = 1.0f;      // [>0] depth tolerance relative to the local depth slope
-    float sigmaNormal = 128.0f;   // [>0] exponent of max(0, n.n')
-    float sigmaLuminance = 4.0f;  // [>0] luminance tolerance in standard deviations
+    float sigmaDepth = 1.0f;      // [>=kMinSigma] depth tolerance relative to the local depth slope
+    float sigmaNormal = 128.0f;   // [>=kMinSigma] exponent of max(0, n.n')
+    float sigmaLuminance = 4.0f;  // [>=kMinSigma] luminance tolerance in standard deviations
     int iterations = 5;           // [1, 10] A-Trous iterations, stride 2^i
     int feedbackIteration = 0;    // [0, iterations-1] its output becomes next frame's colour
                                   // history (0: the first iteration, the paper's choice)

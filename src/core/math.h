@@ -47,12 +47,6 @@ RTD_HOST_DEVICE RTD_INLINE Float3 normalize(Float3 v) {
     float length2 = dot(v, v);
     return v * (length2 > 0.0f ? 1.0f / std::sqrt(length2) : 1.0f);
 }
-// n_i . n_j between guide normals, or 1 (parallel: the normal term neutral) where either pixel
-// has none. The ingest stores unit normals, and 0 where a pixel has none, so that
-// |n_i|^2 |n_j|^2 is 1 to rounding (adding a few ulp) or 0 (adding 1, the dot product being 0).
-RTD_HOST_DEVICE RTD_INLINE float guideCosine(Float3 centre, float centreLengthSquared, Float3 tap) {
-    return dot(centre, tap) + (1.0f - centreLengthSquared * dot(tap, tap));
-}
 RTD_HOST_DEVICE RTD_INLINE float minf(float a, float b) {
     return a < b ? a : b;
 }

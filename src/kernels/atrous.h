@@ -127,7 +127,8 @@ struct Atrous {
         const Float3 pi = g.position.load(i);
         // For the taps below, the plane term's normal unscaled, as the taps' own: both directions
         // then take the scale with their shared reciprocal (and no scaled copy stays live).
-        const EdgeStoppingCentre unscaled{ci, ni, pi, ni, dot(ni, ni)};
+        const EdgeStoppingCentre unscaled{ci, ni, pi, ni,
+                                          terms.normalScale * guideNormalWeight(ni)};
         const std::int32_t keyI = g.filterKey[i];
         Float3 sum = {};
         float sumW = 0.0f;
@@ -188,12 +189,12 @@ struct Atrous {
 
   private:
     // The centre tap's weight: all distances 0 but the normal's (n.n rounds to 1 - a few ulp),
-    // 2^log2k exp(-D_normal^2 / 2sn^2).
+    // 2^log2k exp(-D_normal^2 / 2sn^2); 2^log2k without a normal (a neutral normal term).
     RTD_HOST_DEVICE RTD_INLINE static float centreWeight(const EdgeStoppingTerms& terms,
                                                          Float3 normal) {
-        return exp2Negative(log2B3(0, 0) - normalAngleSquared<OppositeNormalsVanish>(
-                                               guideCosine(normal, dot(normal, normal), normal)) *
-                                               terms.normalScale);
+        return exp2Negative(log2B3(0, 0) -
+                            normalAngleSquared<OppositeNormalsVanish>(dot(normal, normal)) *
+                                (terms.normalScale * guideNormalWeight(normal)));
     }
     // The taps at +o and -o of centre i (those whose filter key is keyI mix in) added to its
     // sums: they share their kernel value, 2^log2Kernel inside the exponent (no multiplication),

@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "core/math.h"
+#include "kernels/views.h"
 
 namespace rtd {
 
@@ -63,13 +64,14 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingTerms base2(EdgeStoppingTerms t) {
 // multiplication per tap: the plane term's normal scaled by sqrt(1 / 2sp^2).
 struct EdgeStoppingCentre {
     Float3 color, normal, position;
-    Float3 planeNormal;         // normal * sqrt(planeScale)
-    float normalLengthSquared;  // 1 to rounding, 0 without a normal (guideCosine)
+    Float3 planeNormal;  // normal * sqrt(planeScale)
+    float normalScale;   // the terms' normalScale, 0 for a centre without a normal (views.h)
 };
 RTD_HOST_DEVICE RTD_INLINE EdgeStoppingCentre edgeStoppingCentre(const EdgeStoppingTerms& t,
                                                                  Float3 color, Float3 normal,
                                                                  Float3 position) {
-    return {color, normal, position, normal * std::sqrt(t.planeScale), dot(normal, normal)};
+    return {color, normal, position, normal * std::sqrt(t.planeScale),
+            t.normalScale * guideNormalWeight(normal)};
 }
 
 // bias: subtracted from the colour and normal terms, where it costs no operation (the A-Trous
@@ -81,14 +83,15 @@ RTD_HOST_DEVICE RTD_INLINE EdgeStoppingParts edgeStoppingParts(const EdgeStoppin
                                                                Float3 positionJ,
                                                                float bias = 0.0f) {
     Float3 dc = c.color - colorJ;
-    float cosine = guideCosine(c.normal, c.normalLengthSquared, normalJ);
+    float cosine = dot(c.normal, normalJ);
+    // The centre's scale: 0 without a normal (its taps are without one too: the same key).
     float normalTerm;
     if constexpr (OppositeNormalsVanish) {
         // (1 - c) q(c) / 2sn^2, the scale entering as (s - s c): no multiplication.
         float cc = atMostOneOrSaturated(cosine);
-        normalTerm = (t.normalScale - t.normalScale * cc) * acosSquaredFactorNearOne(cc) - bias;
+        normalTerm = (c.normalScale - c.normalScale * cc) * acosSquaredFactorNearOne(cc) - bias;
     } else {
-        normalTerm = normalAngleSquared<false>(cosine) * t.normalScale - bias;
+        normalTerm = normalAngleSquared<false>(cosine) * c.normalScale - bias;
     }
     Float3 dp = positionJ - c.position;
     float alongNormal = dot(c.planeNormal, dp);  // (n_i . dp) sqrt(1 / 2sp^2)

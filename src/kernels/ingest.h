@@ -3,8 +3,9 @@
 // (-1), both flagged so the host can count them: the check runs on the device, in parallel, and
 // no kernel ever indexes the object matrices with a bad ID (device-memory inputs included).
 // Radiance beyond +-kMaxRadiance is clamped to it (flagged): the filters' sums of squares stay
-// finite at any finite input. Normals are normalised; a zero or non-finite one is stored as 0,
-// which makes the filters' normal terms neutral for that pixel (guideCosine), and is flagged. A
+// finite at any finite input. Normals are normalised; a zero or non-finite one is stored as 0 and
+// flagged, and the pixel's filter key marks it (views.h: the pixels without a normal filter
+// among themselves, their normal terms neutral). The ingest writes the filter keys. A
 // pixel whose position or depth is not finite (degenerate geometry) becomes background, its
 // geometry 0: it passes through and no filter or history test reads its NaN. With an albedo,
 // object pixels are demodulated here (illumination = colour / clamp(albedo, epsilon,
@@ -36,7 +37,9 @@ struct Ingest {
     // Per pixel (unpadded): bits 0-1 the radiance values replaced by 0, kBadObjectIdFlag, bits
     // 3-4 the radiance values clamped to +-kMaxRadiance, kMissingNormalFlag (an object pixel).
     std::uint8_t* inputFlags;
-    NormalDepth4 normalDepth = {};  // InterleavedGuide only
+    NormalDepth4 normalDepth = {};      // InterleavedGuide only
+    std::int32_t* filterKey = nullptr;  // GBufferView::filterKey
+    int separateObjects = 1;            // keys by object ID (1) or one key for every object (0)
     static constexpr int kBadObjectIdFlag = 4;
     static constexpr int kClampedShift = 3;
     static constexpr int kMissingNormalFlag = 32;
@@ -93,6 +96,8 @@ struct Ingest {
             depth[i] = finiteOrZero(z);
         }
         objectId[i] = kept;
+        filterKey[i] =
+            kept < 0 ? -1 : (separateObjects ? kept : 0) + (hasNormal ? 0 : kWithoutNormalKey);
         inputFlags[s] =
             std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag) + (clamped << kClampedShift) +
                          (kept >= 0 && !hasNormal ? kMissingNormalFlag : 0));

@@ -7,7 +7,6 @@
 
 #include "kernels/accumulate.h"
 #include "kernels/atrous.h"
-#include "kernels/filter_keys.h"
 #include "kernels/ingest.h"
 #include "kernels/jbf.h"
 #include "kernels/modulate.h"
@@ -34,7 +33,6 @@ inline constexpr bool
 #define RTD_FOR_EACH_KERNEL(X)              \
     X(IngestKernel)                         \
     X(IngestInterleavedKernel)              \
-    X(FilterKeysKernel)                     \
     X(LuminanceRowSumsKernel)               \
     X(LuminanceRowSumsWideKernel)           \
     X(ColorRowSumsKernel)                   \

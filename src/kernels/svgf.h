@@ -31,8 +31,8 @@ struct SvgfCentre {
     float depth;
     Float3 normal;
     float luminance;
-    float luminanceScale;       // log2(e) / phi_l: the luminance term in base 2
-    float normalLengthSquared;  // 1 to rounding, 0 without a normal (guideCosine)
+    float luminanceScale;  // log2(e) / phi_l: the luminance term in base 2
+    float normalWeight;    // 1, or 0 for a centre without a normal (views.h: guideNormalWeight)
 };
 
 // The depth term's denominator for a tap `offset` pixels away, sigma_z |grad z . offset| + eps
@@ -68,10 +68,12 @@ RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre
     float dz = c.depth - depthJ;
     float dl = c.luminance - lumJ;
     float e = (absf(dz) * depthScale - log2Kernel) + absf(dl) * c.luminanceScale;
-    float cosine = guideCosine(c.normal, c.normalLengthSquared, normalJ);
+    float cosine = dot(c.normal, normalJ);
+    // A centre without a normal (its taps are without one too: the same key) has the exponent
+    // sigma_n times 0: a neutral normal factor.
     if constexpr (FixedSigmaNormal < 0) {
         // n.n' <= 0 gives sigma_n log2(1e-30): a weight of 0 (2^-126 on the CPU, exp2's floor).
-        float wn = t.sigmaNormal * log2Positive(maxf(cosine, 1e-30f));
+        float wn = (t.sigmaNormal * c.normalWeight) * log2Positive(maxf(cosine, 1e-30f));
         return exp2Negative(minf(wn - e, 0.0f));
     } else {
         // The fit holds where the factor is over 2^-41 (n.n' > 0.8 for sigma_n = 128); below,
@@ -79,9 +81,9 @@ RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre
         // to the centre's. n.n' is capped at 1 (normals a little longer than 1).
         static_assert(FixedSigmaNormal * kNegLog2NearOneFloor >= 41.0f,
                       "sigma_n too small for negLog2FactorNearOne's interval");
-        constexpr float kSigma = float(FixedSigmaNormal);
+        const float sigma = float(FixedSigmaNormal) * c.normalWeight;
         float cc = atMostOneOrSaturated(cosine);
-        return exp2Negative(-((kSigma - kSigma * cc) * negLog2FactorNearOne(cc) + e));
+        return exp2Negative(-((sigma - sigma * cc) * negLog2FactorNearOne(cc) + e));
     }
 }
 
@@ -332,7 +334,7 @@ struct SvgfVariance {
         float depthI;
         loadNormalDepth<InterleavedGuide>(g, i, normalI, depthI);
         SvgfCentre centre{depthI, normalI, luminance(c), kLog2e / terms.sigmaLuminance,
-                          dot(normalI, normalI)};
+                          guideNormalWeight(normalI)};
         // The neighbourhood's luminance variance, with each tap's mean taken relative to the
         // centre's (shifted data: no cancellation). The centre: weight 1, shifted mean 0.
         float centreMean = moments.at(0, i);
@@ -440,7 +442,7 @@ struct SvgfAtrous {
             depthI, normalI, luminance(cI),
             kLog2e /
                 (terms.sigmaLuminance * std::sqrt(maxf(prefiltered / prefilterW, 0.0f)) + 1e-10f),
-            dot(normalI, normalI)};
+            guideNormalWeight(normalI)};
         return {w,
                 derivatives.at(0, i) * float(step),
                 derivatives.at(1, i) * float(step),

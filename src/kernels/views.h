@@ -104,10 +104,19 @@ struct GBufferView {
     const std::int32_t* objectId = nullptr;  // -1: background and border
     NormalDepth4 normalDepth = {};  // null unless the device interleaves the guide (device.h)
     // The edge-aware filters' tap test: a tap mixes in where its key equals the centre's, one
-    // comparison per tap. The object ID where objects are kept apart (the default: this is
-    // objectId); otherwise 0 on every object and -1 on background (FilterKeys).
+    // comparison per tap. Written by the ingest: -1 on background; on an object pixel its object
+    // ID where objects are kept apart (the default), 0 otherwise, plus kWithoutNormalKey where
+    // the pixel has no normal. So pixels without a normal filter among themselves, with their
+    // normal terms neutral (hasGuideNormal), and the others never take them in.
     const std::int32_t* filterKey = nullptr;
 };
+constexpr std::int32_t kWithoutNormalKey = 1 << 30;
+
+// Whether a pixel's guide normal (unit, or 0 without one: the ingest's) is one; a pixel
+// without one weighs its taps' normals by 0 (a neutral normal term).
+RTD_HOST_DEVICE RTD_INLINE float guideNormalWeight(Float3 normal) {
+    return dot(normal, normal) > 0.25f ? 1.0f : 0.0f;
+}
 
 // Normal and depth at a tap: from the interleaved copy (Interleaved) or the planes.
 template <bool Interleaved>
