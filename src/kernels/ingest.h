@@ -71,7 +71,7 @@ struct Ingest {
         // A normal shorter than 1e-6 has no direction worth trusting (and 1 / |n| would overflow).
         float normalLength2 = dot(n, n);
         bool hasNormal = isFinite(normalLength2) && normalLength2 > 1e-12f;
-        float normalScale = hasNormal && kept >= 0 ? 1.0f / std::sqrt(normalLength2) : 0.0f;
+        float inverseLength = hasNormal && kept >= 0 ? 1.0f / std::sqrt(normalLength2) : 0.0f;
         bool use = albedoRgb && kept >= 0 && isFinite(r) && isFinite(gr) && isFinite(b);
         Float3 a;
         a.x = use ? clampf(r, albedoEpsilon, kMaxRadiance) : 1.0f;
@@ -83,9 +83,9 @@ struct Ingest {
                               clampf(c[2] / a.z, -kMaxRadiance, kMaxRadiance)));
         // Per component, as for the albedo above (a selected vector would stop vectorisation).
         auto finiteOrZero = [geometryFinite](float v) { return geometryFinite ? v : 0.0f; };
-        // normalScale 0 (background, no normal) times a non-finite component is NaN: zeroed.
-        auto scaledOrZero = [normalScale](float v) {
-            return normalScale > 0.0f ? v * normalScale : 0.0f;
+        // inverseLength 0 (background, no normal) times a non-finite component is NaN: zeroed.
+        auto scaledOrZero = [inverseLength](float v) {
+            return inverseLength > 0.0f ? v * inverseLength : 0.0f;
         };
         Float3 keptNormal = make3(scaledOrZero(n.x), scaledOrZero(n.y), scaledOrZero(n.z));
         position.store(i, make3(finiteOrZero(p.x), finiteOrZero(p.y), finiteOrZero(p.z)));

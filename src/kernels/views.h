@@ -107,7 +107,7 @@ struct GBufferView {
     // comparison per tap. Written by the ingest: -1 on background; on an object pixel its object
     // ID where objects are kept apart (the default), 0 otherwise, plus kWithoutNormalKey where
     // the pixel has no normal. So pixels without a normal filter among themselves, with their
-    // normal terms neutral (hasGuideNormal), and the others never take them in.
+    // normal terms neutral (guideNormalWeight), and the others never take them in.
     const std::int32_t* filterKey = nullptr;
 };
 constexpr std::int32_t kWithoutNormalKey = 1 << 30;
