@@ -11,6 +11,7 @@ execute_process(COMMAND ${CMAKE_COMMAND} -S "${SOURCE_DIR}/examples/consumer"
                         -B "${WORK_DIR}/consumer" -G Ninja
                         -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
                         -DCMAKE_CXX_COMPILER=${CXX_COMPILER}
+                        "-DCMAKE_CXX_FLAGS=${CXX_FLAGS}"  # the sanitizers of a debug build
                 RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "configuring the consumer with find_package(rtdenoise) failed")

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <string>
 #include <system_error>
@@ -109,11 +110,134 @@ ExrSize checkedSize(const std::filesystem::path& file, const Imf::Header& header
     return {int(width), int(height)};
 }
 
+// OpenEXR's header parse trusts the file: it allocates an attribute's value at the size the file
+// claims (fuzz_exr: a 600-byte file with an attribute of 2 GB), a preview at its claimed width
+// times height and a string vector's strings at their claimed lengths, and reads a value of a
+// known type by that type's layout whatever size the file gives it, so that a wrong size makes it
+// read the rest of the header from the wrong offset, where anything can be taken for a size.
+// So the header is walked here first, attribute by attribute as OpenEXR 3.1 reads it, and any
+// size that is not what OpenEXR will read, or more than the file holds, is refused. A header
+// that ends early (or a file that is not an EXR) is left for OpenEXR to report.
+std::uint32_t loadLe32(const char* p) {
+    return std::uint32_t(std::uint8_t(p[0])) | std::uint32_t(std::uint8_t(p[1])) << 8 |
+           std::uint32_t(std::uint8_t(p[2])) << 16 | std::uint32_t(std::uint8_t(p[3])) << 24;
+}
+
+// What is wrong with a value of `type` stored in `value` ("" if nothing): its size against the
+// bytes OpenEXR reads for the type.
+std::string attributeValueProblem(const std::string& type, const std::string& value,
+                                  std::size_t maxNameLength) {
+    static const std::pair<const char*, std::size_t> fixed[] = {
+        {"box2i", 16},      {"box2f", 16},
+        {"compression", 1}, {"envmap", 1},
+        {"lineOrder", 1},   {"deepImageState", 1},
+        {"int", 4},         {"float", 4},
+        {"double", 8},      {"v2i", 8},
+        {"v2f", 8},         {"v2d", 16},
+        {"v3i", 12},        {"v3f", 12},
+        {"v3d", 24},        {"m33f", 36},
+        {"m33d", 72},       {"m44f", 64},
+        {"m44d", 128},      {"chromaticities", 32},
+        {"keycode", 28},    {"rational", 8},
+        {"timecode", 8},    {"tiledesc", 9}};
+    const std::size_t size = value.size();
+    for (const auto& [name, bytes] : fixed)
+        if (type == name)
+            return size == bytes ? std::string()
+                                 : std::to_string(size) + " bytes, where a " + type + " is " +
+                                       std::to_string(bytes);
+    if (type == "chlist") {  // (name, type, pLinear, 3 reserved, xSampling, ySampling)..., ""
+        std::size_t at = 0;
+        for (;;) {
+            const std::size_t end = value.find('\0', at);
+            if (end == std::string::npos) return "a channel list without its end";
+            if (end == at) break;
+            if (end - at > maxNameLength) return "a channel name longer than the format allows";
+            at = end + 1 + 16;
+            if (at > size) return "a channel list cut short";
+        }
+        return at + 1 == size ? std::string() : "bytes after the channel list";
+    }
+    if (type == "preview") {  // width, height, width * height RGBA bytes
+        if (size < 8) return "a preview without its size";
+        const std::uint64_t pixels =
+            std::uint64_t(loadLe32(value.data())) * loadLe32(value.data() + 4);
+        return 8 + 4 * pixels == size ? std::string() : "a preview of another size than it claims";
+    }
+    if (type == "stringvector") {  // (int32 length, bytes)...
+        std::size_t at = 0;
+        while (at < size) {
+            if (size - at < 4) return "a string vector cut short";
+            const auto length = std::int32_t(loadLe32(value.data() + at));
+            at += 4;
+            if (length < 0 || std::size_t(length) > size - at)
+                return "a string longer than its string vector";
+            at += std::size_t(length);
+        }
+        return {};
+    }
+    if (type == "floatvector") return size % 4 == 0 ? std::string() : "a partial float";
+    if (type == "idmanifest")  // int32 uncompressed size, then size - 4 compressed bytes
+        return size >= 4 ? std::string() : "an ID manifest without its size";
+    return {};  // a string, or a type OpenEXR stores opaquely: the size is what it reads
+}
+
+void checkHeaderAttributes(const std::filesystem::path& file) {
+    std::error_code ec;
+    const std::uintmax_t fileBytes = std::filesystem::file_size(file, ec);
+    std::ifstream in(file, std::ios::binary);
+    if (ec || !in) return;
+    char start[8];
+    if (!in.read(start, sizeof start) || std::int32_t(loadLe32(start)) != Imf::MAGIC) return;
+    const int version = std::int32_t(loadLe32(start + 4));
+    constexpr std::size_t kMaxName = 255;  // OpenEXR 3's Name::MAX_LENGTH, for every name
+    std::uintmax_t offset = sizeof start;
+    const auto fail = [&file](const std::string& problem) {
+        throw Error(ErrorCode::InvalidInput, file.string() + ": corrupt header: " + problem);
+    };
+    // false: the file ends first.
+    const auto readName = [&](std::string& text, std::size_t maxLength, const char* what) {
+        text.clear();
+        for (char c; in.get(c);) {
+            ++offset;
+            if (c == 0) return true;
+            if (text.size() == maxLength)
+                fail(std::string("an attribute ") + what + " longer than " +
+                     std::to_string(maxLength) + " characters");
+            text.push_back(c);
+        }
+        return false;
+    };
+    for (;;) {  // the headers: one, or a multi-part file's list ended by an empty one
+        std::string name, type, value;
+        bool empty = true;
+        for (;;) {
+            if (!readName(name, kMaxName, "name")) return;
+            if (name.empty()) break;  // the end of this header
+            empty = false;
+            char size[4];
+            if (!readName(type, kMaxName, "type") || !in.read(size, sizeof size)) return;
+            offset += sizeof size;
+            const auto claimed = std::int32_t(loadLe32(size));
+            if (claimed < 0 || std::uintmax_t(claimed) > fileBytes - offset)
+                fail("attribute '" + name + "' (" + type + ") claims " + std::to_string(claimed) +
+                     " bytes, but " + std::to_string(fileBytes - offset) + " follow it");
+            value.resize(std::size_t(claimed));
+            if (!in.read(value.data(), claimed)) return;
+            offset += std::uintmax_t(claimed);
+            const std::string problem = attributeValueProblem(type, value, kMaxName);
+            if (!problem.empty()) fail("attribute '" + name + "' (" + type + "): " + problem);
+        }
+        if (!Imf::isMultiPart(version) || empty) return;
+    }
+}
+
 // The size claimed by the file's header, checked (checkedSize) before OpenEXR's InputFile reads
 // the block offset table it sizes from it: for a hostile header that read fails with "early end
 // of file", or allocates as claimed, either way saying nothing of the size. A file that is not a
 // readable EXR header is left for InputFile to report.
 void checkClaimedSize(const std::filesystem::path& file) {
+    checkHeaderAttributes(file);
     std::optional<Imf::Header> header;
     try {
         Imf::StdIFStream stream(file.c_str());
