@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 jobs="$(nproc)"
 # LeakSanitizer on, and a report of a leak, overflow or UB is an error exit (the preset's
 # -fno-sanitize-recover=all makes UBSan's abort the test).
-export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=0}"
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 
 cmake --preset debug
