@@ -54,7 +54,8 @@ struct Atrous {
         // Exponents in base 2, the spline's log2 weight inside them: exp2 of each tap's sum.
         const EdgeStoppingTerms terms = base2(edges);
         EdgeStoppingCentre centre = edgeStoppingCentre(terms, ci, ni, g.position.load(i));
-        std::int32_t idI = g.objectId[i];
+        // The key, not the object ID (-1 alike on background): one buffer of IDs read, not two.
+        std::int32_t idI = g.filterKey[i];
         // Taps whose filter key is the centre's (views.h; a background centre's result is unused).
         const std::int32_t keyI = g.filterKey[i];
         const float centreW = centreWeight(terms, ni);
@@ -79,7 +80,7 @@ struct Atrous {
     RTD_HOST_DEVICE RTD_INLINE void filterPair(int x, int y) const {
         const Layout& L = g.layout;
         const PixelIndex iA = L.index(x, y), iB = iA + L.offset(0, Stride);
-        const std::int32_t idA = g.objectId[iA], idB = g.objectId[iB];
+        const std::int32_t idA = g.filterKey[iA], idB = g.filterKey[iB];
         const EdgeStoppingTerms terms = base2(edges);
         Tap centreA = tap(iA), centreB = tap(iB);
         if (idA < 0 && idB < 0) {  // background passes through; a warp of it runs no taps
@@ -183,7 +184,7 @@ struct Atrous {
             const float centreW = centreWeight(terms, ni);
             sum += ci * centreW;
             sumW += centreW;
-            finish(x, y, i, ci, sum, sumW, g.objectId[i]);
+            finish(x, y, i, ci, sum, sumW, g.filterKey[i]);
         }
     }
 
@@ -265,8 +266,8 @@ struct Atrous {
     // The result from the sums (foreground: sumW is at least about (3/8)^2, the centre tap's);
     // background passes through.
     RTD_HOST_DEVICE RTD_INLINE void finish(int x, int y, PixelIndex i, Float3 ci, Float3 sum,
-                                           float sumW, std::int32_t id) const {
-        float keep = 1.0f - foregroundMask(id);
+                                           float sumW, std::int32_t key) const {
+        float keep = 1.0f - foregroundMask(key);  // background: the key -1
         float scale = (1.0f - keep) / maxf(sumW, 1e-20f);
         Float3 result = sum * scale + ci * keep;
         if constexpr (Modulated)

@@ -21,7 +21,7 @@ struct Jbf {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
         Float3 ci = in.load(i);
-        if (g.objectId[i] < 0) {
+        if (g.filterKey[i] < 0) {  // background (the key: one buffer of IDs read, not two)
             out.store(i, ci);
             return;
         }

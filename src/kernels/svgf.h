@@ -312,7 +312,7 @@ struct SvgfVariance {
     // the decision the same on every back end.
     RTD_HOST_DEVICE RTD_INLINE bool active(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        return g.objectId[i] >= 0 && length[i] < shortHistory - 1e-3f;
+        return g.filterKey[i] >= 0 && length[i] < shortHistory - 1e-3f;  // an object's
     }
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
@@ -431,7 +431,7 @@ struct SvgfAtrous {
                 float k = (dx == 0 && dy == 0)   ? kGauss[0]
                           : (dx == 0 || dy == 0) ? kGauss[1]
                                                  : 0.0625f;
-                float m = g.objectId[j] >= 0 ? k : 0.0f;
+                float m = g.filterKey[j] >= 0 ? k : 0.0f;  // an object's
                 prefiltered += m * in.at(3, j);
                 prefilterW += m;
             }
@@ -486,7 +486,8 @@ struct SvgfAtrous {
         const int step = FixedStride > 0 ? FixedStride : stride;
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
-        std::int32_t id = g.objectId[i];
+        // The key, not the object ID (-1 alike on background): one buffer of IDs read, not two.
+        std::int32_t id = g.filterKey[i];
         Float3 cI = in.rgb().load(i);
         float varianceI = in.at(3, i);
         // Background passes through. The GPU's form (InterleavedGuide) skips its work by a
@@ -534,7 +535,7 @@ struct SvgfAtrous {
         static_assert(InterleavedGuide && Stride > 0, "the GPU's form, at a fixed stride");
         const Layout& L = g.layout;
         const PixelIndex iA = L.index(x, y), iB = iA + L.offset(0, Stride);
-        const bool foregroundA = g.objectId[iA] >= 0, foregroundB = g.objectId[iB] >= 0;
+        const bool foregroundA = g.filterKey[iA] >= 0, foregroundB = g.filterKey[iB] >= 0;
         const Tap centreA = tap(iA), centreB = tap(iB);
         if (!foregroundA && !foregroundB) {  // background passes through (as in filter)
             store(x, y, iA, centreA.color, centreA.variance);
