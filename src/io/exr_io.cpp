@@ -51,6 +51,11 @@ std::string channelNames(const Imf::ChannelList& channels) {
 // would otherwise end in std::bad_alloc or an allocation of gigabytes.
 constexpr std::int64_t kMaxSide = 65536;
 constexpr std::int64_t kMaxPixels = std::int64_t(1) << 28;  // 16384 x 16384
+// OpenEXR allocates each (de)compression buffer at one block's claimed size, pixels of every
+// channel: a tile of 65536x65536, or a scan-line block of thousands of channels, from a file of
+// a few hundred bytes (fuzz_exr: malloc(1811939352)). 256 MB holds a 16384-wide block of 256
+// lines (DWAB's) of 4 float channels four times over.
+constexpr std::int64_t kMaxBlockBytes = std::int64_t(1) << 28;
 
 // Scanlines per stored block of each compression (OpenEXR's own table is not public).
 int linesPerChunk(Imf::Compression compression) {
@@ -89,15 +94,27 @@ ExrSize checkedSize(const std::filesystem::path& file, const Imf::Header& header
                         std::to_string(kMaxSide) + " pixels a side and " +
                         std::to_string(kMaxPixels) + " pixels)");
     }
-    std::int64_t chunks = 0;
+    std::int64_t bytesPerPixel = 0;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it)
+        bytesPerPixel += it.channel().type == Imf::HALF ? 2 : 4;
+    std::int64_t chunks = 0, blockPixels = 0;
     if (header.hasTileDescription()) {
         const Imf::TileDescription& tiles = header.tileDescription();
         const std::int64_t tx = std::max<std::int64_t>(tiles.xSize, 1);
         const std::int64_t ty = std::max<std::int64_t>(tiles.ySize, 1);
         chunks = ((width + tx - 1) / tx) * ((height + ty - 1) / ty);  // level 0 alone
+        blockPixels = tx * ty;  // each under 2^32: no overflow
     } else {
         const int lines = linesPerChunk(header.compression());
         chunks = (height + lines - 1) / lines;
+        blockPixels = width * lines;
+    }
+    if (blockPixels * bytesPerPixel > kMaxBlockBytes) {
+        throw Error(ErrorCode::InvalidInput,
+                    file.string() + ": the header claims blocks of " + std::to_string(blockPixels) +
+                        " pixels of " + std::to_string(bytesPerPixel) +
+                        " bytes (every channel), more than this reader accepts (" +
+                        std::to_string(kMaxBlockBytes) + " bytes a block)");
     }
     std::error_code ec;
     const std::uintmax_t bytes = std::filesystem::file_size(file, ec);
