@@ -103,7 +103,15 @@ ExrSize checkedSize(const std::filesystem::path& file, const Imf::Header& header
         const std::int64_t tx = std::max<std::int64_t>(tiles.xSize, 1);
         const std::int64_t ty = std::max<std::int64_t>(tiles.ySize, 1);
         chunks = ((width + tx - 1) / tx) * ((height + ty - 1) / ty);  // level 0 alone
-        blockPixels = tx * ty;  // each under 2^32: no overflow
+        // Each side checked first: two claimed sides of near 2^32 overflow their product.
+        if (tx > kMaxSide || ty > kMaxSide) {
+            throw Error(ErrorCode::InvalidInput,
+                        file.string() + ": the header claims tiles of " + std::to_string(tx) + "x" +
+                            std::to_string(ty) +
+                            " pixels, larger than this reader accepts (at most " +
+                            std::to_string(kMaxSide) + " a side)");
+        }
+        blockPixels = tx * ty;
     } else {
         const int lines = linesPerChunk(header.compression());
         chunks = (height + lines - 1) / lines;
