@@ -42,6 +42,26 @@ void endChildSpawn() noexcept;
 // Kills and reaps the registered children, then unlinks the registered files. Async-signal-safe.
 void removeLiveTemporaries() noexcept;
 
+// Throws MissingFile for a missing file or a dangling link, InvalidInput for a folder or other
+// non-regular file ("is a folder, not <kind>"), each naming the file.
+inline void requireRegularFile(const std::filesystem::path& file, const char* kind) {
+    std::error_code ec;
+    const std::filesystem::file_status status = std::filesystem::status(file, ec);
+    if (!std::filesystem::exists(status)) {
+        const bool dangling =
+            std::filesystem::is_symlink(std::filesystem::symlink_status(file, ec));
+        throw Error(ErrorCode::MissingFile,
+                    file.string() +
+                        (dangling ? ": a link to a file that does not exist" : ": no such file"));
+    }
+    if (!std::filesystem::is_regular_file(status)) {
+        throw Error(ErrorCode::InvalidInput,
+                    file.string() + (std::filesystem::is_directory(status)
+                                         ? std::string(": is a folder, not ") + kind
+                                         : std::string(": not a regular file")));
+    }
+}
+
 // ".<name>.tmp-<pid>-<n>" in the same folder: the same file system, so the rename is atomic; the
 // counter keeps two threads of one process writing the same name apart.
 inline std::filesystem::path temporaryPathFor(const std::filesystem::path& file) {

@@ -327,20 +327,7 @@ void requireReadableFile(const std::filesystem::path& file,
     if (channelChoices.empty()) {
         throw Error(ErrorCode::InvalidArgument, file.string() + ": no channels requested");
     }
-    std::error_code ec;
-    const std::filesystem::file_status status = std::filesystem::status(file, ec);
-    if (!std::filesystem::exists(status)) {
-        const bool dangling =
-            std::filesystem::is_symlink(std::filesystem::symlink_status(file, ec));
-        throw Error(ErrorCode::MissingFile,
-                    file.string() +
-                        (dangling ? ": a link to a file that does not exist" : ": no such file"));
-    }
-    if (!std::filesystem::is_regular_file(status)) {
-        throw Error(ErrorCode::InvalidInput, file.string() + (std::filesystem::is_directory(status)
-                                                                  ? ": is a folder, not an EXR file"
-                                                                  : ": not a regular file"));
-    }
+    io_detail::requireRegularFile(file, "an EXR file");
 }
 
 }  // namespace

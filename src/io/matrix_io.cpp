@@ -10,6 +10,7 @@
 #include <system_error>
 #include <vector>
 
+#include "io/atomic_file.h"
 #include "rtdenoise/error.h"
 #include "rtdenoise/io.h"
 
@@ -44,20 +45,7 @@ Matrix4 decodeMatrix(const std::filesystem::path& file, const unsigned char* byt
 }  // namespace
 
 MatrixFile readMatrixFile(const std::filesystem::path& file) {
-    std::error_code ec;
-    const std::filesystem::file_status status = std::filesystem::status(file, ec);
-    if (!std::filesystem::exists(status)) {
-        const bool dangling =
-            std::filesystem::is_symlink(std::filesystem::symlink_status(file, ec));
-        throw Error(ErrorCode::MissingFile,
-                    file.string() +
-                        (dangling ? ": a link to a file that does not exist" : ": no such file"));
-    }
-    if (!std::filesystem::is_regular_file(status)) {
-        throw Error(ErrorCode::InvalidInput, file.string() + (std::filesystem::is_directory(status)
-                                                                  ? ": is a folder, not a .mat file"
-                                                                  : ": not a regular file"));
-    }
+    io_detail::requireRegularFile(file, "a .mat file");
     std::ifstream in(file, std::ios::binary);
     if (!in) throw Error(ErrorCode::IoFailure, file.string() + ": cannot open for reading");
     const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
