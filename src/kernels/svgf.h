@@ -55,9 +55,8 @@ RTD_HOST_DEVICE RTD_INLINE float svgfDepthScale(const SvgfTerms& t, float depthA
 // sigma_n log2(n.n') (the GPU's form: log2 is one instruction there). FixedSigmaNormal = s > 0
 // (the CPU's form for the paper's 128): sigma_n = s known at compile time, and -log2(n.n') =
 // (1 - n.n') L(n.n') with L a polynomial fitted near n.n' = 1 (negLog2FactorNearOne): seven
-// operations in the exponent where the CPU's log2 polynomial costs more, and where seven
-// squarings, a clamp and a multiplication after exp2 cost ten (its iterations ran 5 % faster
-// than with those squarings, which were ~25 % faster than the log2).
+// operations in the exponent, fewer than the CPU's log2 polynomial or seven squarings after exp2
+// (the timings: docs/performance-cpu.md).
 template <int FixedSigmaNormal>
 RTD_HOST_DEVICE RTD_INLINE float svgfWeight(const SvgfTerms& t, const SvgfCentre& c,
                                             float depthScale, float depthJ, Float3 normalJ,
@@ -493,7 +492,7 @@ struct SvgfAtrous {
         // Background passes through. The GPU's form (InterleavedGuide) skips its work by a
         // branch: a warp of background pixels then runs no taps. The CPU's, vectorised across
         // pixels, computes every lane and selects at the end: there a branch would mask every
-        // load and blend of the taps (the iterations ran 10 % slower so on box).
+        // load and blend of the taps (slower: docs/performance-cpu.md).
         const bool foreground = id >= 0;
         if constexpr (InterleavedGuide) {
             if (!foreground) {
@@ -526,10 +525,9 @@ struct SvgfAtrous {
     // InterleavedGuide; y + Stride inside the image): their 5x5 taps share 20 places, so the
     // pair loads 30 taps where two pixels alone load 50. Every tap is evaluated in a couple whose
     // depth scales share one division (addCouple): a shared tap for both centres; A's row -2 with
-    // B's row +2; the two centres, each a tap of the other. (Written for the tap before the centre
-    // of each +/- pair of one centre instead, the scales stayed live across the taps: the
-    // iterations at strides 1-8 ran 0.084-0.093 ms against 0.082-0.084 so, H100, 1080p.) Each
-    // pixel gets filter's result up to rounding.
+    // B's row +2; the two centres, each a tap of the other, so that no depth scale stays live
+    // across the taps (the per-centre form's timing: docs/performance-gpu.md). Each pixel gets
+    // filter's result up to rounding.
     template <int Stride>
     RTD_HOST_DEVICE RTD_INLINE void filterPair(int x, int y) const {
         static_assert(InterleavedGuide && Stride > 0, "the GPU's form, at a fixed stride");

@@ -81,8 +81,8 @@ RTD_HOST_DEVICE RTD_INLINE void store4(float* p, Float4 v) {
 
 // Normal and depth interleaved, (n.x, n.y, n.z, depth) per pixel of the padded layout: the
 // GPU's copy of the guide the SVGF filters read per tap (one 16-byte load where the planes
-// take four: the iterations ran 9 % faster so on the H100). The CPU keeps the planes, which
-// it loads as contiguous vectors.
+// take four; the timing: docs/performance-gpu.md). The CPU keeps the planes, which it loads as
+// contiguous vectors.
 struct NormalDepth4 {
     float* data = nullptr;
     RTD_HOST_DEVICE RTD_INLINE void load(PixelIndex i, Float3& normal, float& depth) const {

@@ -129,7 +129,8 @@ RTD_INLINE void runRow(const Kernel& kernel, int x0, int x1, int y) {
 // rows. At narrower strides plain order is faster: its reads are continuous streams for the
 // hardware prefetchers.
 // Interleave when the rows read over 4 * stride rows (about 9 planes of floats: colour, variance,
-// depth, normal, ID) exceed a core's L2 (2 MiB on this machine's Sapphire Rapids class cores).
+// depth, normal, ID) exceed a core's L2, taken as 2 MiB (the value the row orders were timed
+// with: docs/performance-cpu.md).
 constexpr long kL2CacheBytes = 2L << 20;
 constexpr long kPlanesPerTap = 9;
 inline bool interleaveRows(int stride, int width) {
@@ -146,8 +147,8 @@ inline int interleavedRow(int k, int height, int stride) {
 }
 
 // Rows shared out to all cores, the k-th visited being rowOf(k). Each order gets its own
-// instantiation: folded into one function with the order chosen at run time, the plain order's
-// SVGF A-Trous ran 8 % slower at 512x512 (a clean-build A/B).
+// instantiation: with the order chosen at run time the plain order ran slower
+// (docs/performance-cpu.md).
 template <class Kernel, class RowOf>
 void parallelRows(int width, int height, const Kernel& kernel, RowOf rowOf) {
 #pragma omp parallel
@@ -159,9 +160,8 @@ void parallelRows(int width, int height, const Kernel& kernel, RowOf rowOf) {
         // the compiler reloaded them per pixel and wrote the planes with scatters.
         const Kernel local = kernel;
         // A-Trous levels: each core takes one contiguous block of the visited rows, whose tap
-        // rows it then reuses from its own L2 (box temporal's levels 4 % faster than with
-        // 4-row chunks dealt out in turn, 1080p unchanged). The other kernels keep the dynamic
-        // chunks: the ingest, streaming its input, ran 30 % slower in static blocks.
+        // rows it then reuses from its own L2. The other kernels keep the dynamic chunks, which
+        // suit a streaming pass such as the ingest (both timed: docs/performance-cpu.md).
         if constexpr (kHasTapRowStride<Kernel>) {
 #pragma omp for schedule(static)
             for (int k = 0; k < height; ++k) runRow(local, 0, width, rowOf(k));
@@ -201,9 +201,9 @@ struct PartnerRing {
 
 // Whether a SharesPairs kernel visits its rows in classes of equal y mod stride: as
 // interleaveRows, but counting the plain order's ring too, and against 3/4 of L2 (the output
-// rows share it). At 512x512 the course's stride 16 then runs interleaved (its level 12 % faster
-// so in alternating runs; in plain order its ring of 33 rows holds 0.76 MB besides 1.2 MB of
-// tap rows); at 1920x1080, strides 4 to 16 (stride 4 as fast either way).
+// rows share it). At 512x512 the course's stride 16 then runs interleaved (in plain order its
+// ring of 33 rows holds 0.76 MB besides 1.2 MB of tap rows); at 1920x1080, strides 4 to 16
+// (the timings: docs/performance-cpu.md).
 inline bool visitsInterleaved(int stride, int width, int height) {
     if (stride <= 1 || stride >= height) return false;
     long tapRows = 4L * stride * width * long(sizeof(float)) * kPlanesPerTap;
