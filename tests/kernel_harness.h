@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "devices/cpu/cpu_scratch.h"
+#include "devices/cpu/parallel_for.h"
 #include "devices/device.h"
 
 namespace rtd {
@@ -84,10 +86,28 @@ void runTilesAsBlocks(const Kernel& kernel, int w, int h, int threads = 256) {
         }
 }
 
+// The CPU device, and any single kernel run on it as the CPU device runs its forms
+// (parallelFor2D, with the device's scratch): the GPU's forms too, which the device itself
+// never picks.
+class TestDevice {
+  public:
+    operator Device&() { return *device_; }
+    Device* operator->() { return device_.get(); }
+    void fill(void* p, int value, std::size_t bytes) { device_->fill(p, value, bytes); }
+    template <class Kernel>
+    void launch(const Kernel& kernel, int width, int height) {
+        parallelFor2D(width, height, kernel, &scratch_);
+    }
+
+  private:
+    std::unique_ptr<Device> device_ = createCpuDevice();
+    CpuScratch scratch_{*device_};
+};
+
 // Padded planar buffers for a w x h image, as the Denoiser lays them out.
 struct Harness {
     // A flat wall facing the camera (normal -z, z = 5), one object, everything else 0.
-    std::unique_ptr<Device> device = createCpuDevice();
+    std::unique_ptr<TestDevice> device = std::make_unique<TestDevice>();
     Layout layout;
     DeviceBuffer<float> normal, position, depth, a, b, c, sums;
     DeviceBuffer<std::int32_t> ids;

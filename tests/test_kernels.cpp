@@ -406,19 +406,20 @@ TEST(CpuLauncher, SharingScratchIgnoresStridesOfTheImageHeightOrMore) {
     EXPECT_EQ(sharingScratchFloats(37, 1, 64), 0u);       // one row: nothing to share
 }
 
-// The device reserves the levels' scratch with the denoiser's buffers: the levels themselves,
-// at every stride the padding allows, then allocate nothing.
+// The device reserves the levels' scratch when it prepares a pipeline with A-Trous levels: the
+// levels themselves, at every stride the padding allows, then allocate nothing.
 TEST(CpuLauncher, AtrousLevelsAllocateNothingOnceTheWorkspaceIsReserved) {
     Harness h(37, 45, 64);
-    const std::size_t buffers = h.device->allocatedBytes();
-    h.device->reserveAtrousWorkspace(h.layout);
-    const std::size_t reserved = h.device->allocatedBytes();
+    Device& device = *h.device;
+    const std::size_t buffers = device.allocatedBytes();
+    device.prepare(h.layout, {StepKind::Ingest, StepKind::AtrousLevel});
+    const std::size_t reserved = device.allocatedBytes();
     EXPECT_GE(reserved - buffers, sharingScratchFloats(37, 45, h.layout.padding) * sizeof(float));
     const EdgeStoppingTerms terms{1.0f, 50.0f, 50.0f};
     for (int stride : {1, 2, 4, 8, 16, 32}) {  // 32: the image's height or more, per pixel
-        h.device->launch(AtrousKernel{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms}, 37,
-                         45);
-        EXPECT_EQ(h.device->allocatedBytes(), reserved) << "stride " << stride;
+        device.run(
+            AtrousLevelStep{{h.gbuffer(), h.planes(h.a), h.planes(h.b), stride, terms}, false});
+        EXPECT_EQ(device.allocatedBytes(), reserved) << "stride " << stride;
     }
 }
 

@@ -274,7 +274,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         fmt::print("denoise  median {:8.2f} ms/frame  (device {})\n", median(frameTimes),
                    denoiser.deviceName());
         for (std::size_t p = 0; p < passTimes.size(); ++p)
-            fmt::print("  {:<12} median {:8.2f} ms\n", denoiser.passes()[p].name,
+            fmt::print("  {:<14} median {:8.2f} ms\n", denoiser.passes()[p].name,
                        median(passTimes[p]));
         fmt::print("read wait median {:8.2f} ms/frame (reading overlaps denoising)\n",
                    median(readWaitTimes));

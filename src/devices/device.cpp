@@ -8,21 +8,22 @@
 
 namespace rtd {
 
-std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa) {
+std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa, TilePasses tilePasses) {
 #if RTD_HAS_CUDA
     switch (type) {
         case DeviceType::Cpu:
-            return createCpuDevice(cpuIsa);
+            return createCpuDevice(cpuIsa, tilePasses);
         case DeviceType::Cuda:
-            return createCudaDevice();
+            return createCudaDevice(tilePasses);
         case DeviceType::Auto:
-            return cudaDeviceAvailable() ? createCudaDevice() : createCpuDevice(cpuIsa);
+            return cudaDeviceAvailable() ? createCudaDevice(tilePasses)
+                                         : createCpuDevice(cpuIsa, tilePasses);
     }
 #else
     switch (type) {
         case DeviceType::Cpu:
         case DeviceType::Auto:  // no GPU back end in this build: the CPU is the only device
-            return createCpuDevice(cpuIsa);
+            return createCpuDevice(cpuIsa, tilePasses);
         case DeviceType::Cuda:
             throw Error(ErrorCode::DeviceFailure,
                         "--device cuda: this build has no CUDA back end (nvcc was not found when "

@@ -1,12 +1,13 @@
-// A compute device: memory, copies and kernel launches. The CPU device runs kernels with an
-// OpenMP parallelFor2D; a GPU device launches the same functors from CUDA.
+// A compute device: memory, copies and the logical kernels (steps.h). The CPU device runs their
+// functors with an OpenMP parallelFor2D; a GPU device launches the same functors from CUDA.
 #pragma once
 
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
-#include "kernels/kernel_list.h"
+#include "devices/steps.h"
 #include "rtdenoise/settings.h"
 
 namespace rtd {
@@ -17,33 +18,11 @@ class Device {
     virtual std::string name() const = 0;
     // True if kernels can read and write host memory directly (no staging copies needed).
     virtual bool sharesHostMemory() const = 0;
-    // True where log2 is one instruction (a GPU's special-function unit): SVGF's normal factor
-    // max(0, n.n')^128 is then cheapest as exp2(128 log2(n.n')) inside the weight's exponent. On
-    // the CPU log2 is a polynomial, and one fitted near n.n' = 1 for sigma_n = 128 wins
-    // (svgfWeight).
-    virtual bool hasFastLogarithm() const { return false; }
-    // True where SVGF keeps normal and depth interleaved, one 16-byte load per tap (a GPU),
-    // rather than in planes that load as contiguous vectors (a CPU). Such a device also has a
-    // fast logarithm (the interleaved kernels use the log2 form) and prefers fused passes (the
-    // temporal stage reads the interleaved copies in its one-pass form only), and it runs a
-    // pixel per thread: the interleaved SVGF iteration and variance skip background (inactive)
-    // pixels by a branch, where the CPU's forms compute every lane and select.
-    virtual bool interleavesGuide() const { return false; }
-    // True where passes the CPU keeps apart run better as one (a GPU): there a pass's
-    // intermediate planes cost a round trip through memory, and a rare branch (SVGF's 3x3
-    // history search) only its warp. The CPU splits them so that each vectorises. (SVGF's
-    // temporal stage, SvgfTemporal; the temporal method's geometry slopes, reprojection and
-    // accumulation, ReprojectAccumulate.)
-    virtual bool prefersFusedPasses() const { return false; }
 
-    // True where the firefly removal runs as one tile pass (OutlierTile, tile.h), its window's
-    // row sums kept in the tile rather than in planes a second pass reads back (and SVGF's
-    // history-clamp row sums computed in the same pass).
-    virtual bool runsTilePasses() const { return false; }
-    // Working memory the course's A-Trous levels need besides their buffers on this device (the
-    // CPU's rows of pair weights, CpuScratch), for frames of `layout` and levels up to stride
-    // layout.padding / 2: reserved with the denoiser's buffers, so that no pass allocates.
-    virtual void reserveAtrousWorkspace(const Layout& layout) { (void)layout; }
+    // Sees a pipeline's logical steps before its first frame (and when the frame size changes),
+    // picks each one's form and reserves the working memory those forms need beside the
+    // pipeline's own images (counted in allocatedBytes()), so that no step allocates.
+    virtual void prepare(const Layout& layout, const std::vector<StepKind>& steps) = 0;
 
     virtual void* allocate(std::size_t bytes) = 0;
     virtual void release(void* pointer) noexcept = 0;
@@ -63,9 +42,17 @@ class Device {
     };
     virtual InputFlagCounts countInputFlags(const std::uint8_t* deviceFlags, std::size_t n) = 0;
 
-#define RTD_DECLARE_LAUNCH(K) virtual void launch(const K& kernel, int width, int height) = 0;
-    RTD_FOR_EACH_KERNEL(RTD_DECLARE_LAUNCH)
-#undef RTD_DECLARE_LAUNCH
+    // The logical kernels (steps.h), each over the frame's pixels in this device's form.
+    virtual void run(const IngestStep& step) = 0;
+    virtual void run(const DespeckleStep& step) = 0;
+    virtual void run(const JbfStep& step) = 0;
+    virtual void run(const AtrousLevelStep& step) = 0;
+    virtual void run(const TemporalStageStep& step) = 0;
+    virtual void run(const GeometryStep& step) = 0;
+    virtual void run(const SvgfTemporalStageStep& step) = 0;
+    virtual void run(const SvgfVarianceStep& step) = 0;
+    virtual void run(const SvgfAtrousIterationStep& step) = 0;
+    virtual void run(const ModulateStep& step) = 0;
 
     // Timestamps in the device's own order of work (slot 0 up to kTimestampSlots - 1), read
     // after synchronize(): the time between two, in milliseconds.
@@ -74,9 +61,7 @@ class Device {
     virtual double millisecondsBetween(int firstSlot, int secondSlot) = 0;
 
     // Bytes held in DeviceBuffers on this device (what a denoiser keeps resident).
-    std::size_t allocatedBytes() const {
-        return allocatedBytes_;
-    }
+    std::size_t allocatedBytes() const { return allocatedBytes_; }
     void noteAllocation(std::size_t bytes, bool allocated) {
         allocatedBytes_ = allocated ? allocatedBytes_ + bytes : allocatedBytes_ - bytes;
     }
@@ -89,10 +74,13 @@ class Device {
 void parallelCopy(void* dst, const void* src, std::size_t bytes);
 
 // Throws rtd::Error(DeviceFailure) if the requested device is not available.
-std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa = CpuIsa::Auto);
-std::unique_ptr<Device> createCpuDevice(CpuIsa isa = CpuIsa::Auto);
+// cpuIsa and tilePasses: the comparisons' tuning (settings.h); Auto is the device's choice.
+std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa = CpuIsa::Auto,
+                                     TilePasses tilePasses = TilePasses::Auto);
+std::unique_ptr<Device> createCpuDevice(CpuIsa isa = CpuIsa::Auto,
+                                        TilePasses tilePasses = TilePasses::Auto);
 // Only in builds with the CUDA back end (RTD_HAS_CUDA); throws if no GPU is present.
-std::unique_ptr<Device> createCudaDevice();
+std::unique_ptr<Device> createCudaDevice(TilePasses tilePasses = TilePasses::Auto);
 bool cudaDeviceAvailable();
 
 // An array of T in a device's memory, freed with its owner.

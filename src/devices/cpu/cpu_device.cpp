@@ -1,5 +1,6 @@
 #include <omp.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdlib>
@@ -37,15 +38,112 @@ namespace {
 
 class CpuDevice final : public Device {
   public:
-    explicit CpuDevice(CpuIsa isa) : kernels_(cpuKernels(isa)), scratch_(*this) {}
+    CpuDevice(CpuIsa isa, TilePasses tilePasses)
+        : kernels_(cpuKernels(isa)), tiles_(tilePasses == TilePasses::On), scratch_(*this) {}
     std::string name() const override {
         return "cpu (" + std::to_string(omp_get_max_threads()) + " threads, " +
                toString(kernels_.isa) + ")";
     }
     bool sharesHostMemory() const override { return true; }
-    void reserveAtrousWorkspace(const Layout& layout) override {
-        scratch_.floats(sharingScratchFloats(layout.width, layout.height, layout.padding));
+
+    void prepare(const Layout& layout, const std::vector<StepKind>& steps) override {
+        layout_ = layout;
+        auto has = [&](StepKind k) {
+            return std::find(steps.begin(), steps.end(), k) != steps.end();
+        };
+        auto planes = [&](DeviceBuffer<float>& b, int count) {
+            b = DeviceBuffer<float>(*this, std::size_t(count) * std::size_t(layout.planeSize));
+            fill(b.data(), 0, b.bytes());
+        };
+        // The A-Trous levels' rows of pair weights (CpuScratch), up to stride padding / 2.
+        if (has(StepKind::AtrousLevel))
+            scratch_.floats(sharingScratchFloats(layout.width, layout.height, layout.padding));
+        // The split temporal stages hand their slopes and history on through planes.
+        if (has(StepKind::TemporalStage)) {
+            planes(derivatives_, 3);
+            planes(reprojected_, 3);
+        }
+        if (has(StepKind::SvgfTemporalStage)) planes(svgfHistory_, kSvgfHistoryPlanes);
     }
+
+    void run(const IngestStep& s) override { launch(s.ingest); }
+    void run(const DespeckleStep& s) override {
+        if (tiles_ && s.radius <= kNarrowWindow) {  // the window statistics kept in the tile
+            if (s.clampSums.data)
+                launch(OutlierClampTileKernel{s.g, s.in, s.out, s.clampSums, s.radius, s.k});
+            else
+                launch(OutlierTileKernel{s.g, s.in, s.out, {}, s.radius, s.k});
+            return;
+        }
+        forWindow(s.radius, [&]<int R>() {
+            launch(LuminanceRowSums<R>{s.g, s.in, s.rowSums, s.radius});
+            launch(Outlier<R>{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
+        });
+        if (s.clampSums.data)
+            launch(ColorRowSumsKernel{s.g, s.out, s.clampSums, kSvgfWindowRadius});
+    }
+    void run(const JbfStep& s) override {
+        const JbfKernel& j = s.jbf;
+        if (oppositeNormalsVanish(j.edges))  // no square root per tap
+            launch(JbfNarrowNormalKernel{j.g, j.in, j.out, j.radius, j.coordScale, j.edges});
+        else
+            launch(j);
+    }
+    void run(const AtrousLevelStep& s) override {
+        bool narrow = oppositeNormalsVanish(s.level.edges);  // no square root per tap
+        if (s.modulated)
+            narrow ? launch(atrousForm<true, true>(s.level)) : launch(s.level);
+        else
+            narrow ? launch(atrousForm<true, false>(s.level))
+                   : launch(atrousForm<false, false>(s.level));
+    }
+    // Split: each pass vectorises (the reprojection's gathers would stop the accumulation's).
+    void run(const TemporalStageStep& s) override {
+        const AccumulateModulatedKernel& a = s.accumulate;
+        ReprojectKernel reproject = s.reproject;
+        reproject.derivatives = {derivatives_.data(), layout_.planeSize};
+        reproject.reprojected = {reprojected_.data(), layout_.planeSize};
+        forWindow(a.radius, [&]<int R>() {
+            launch(ColorRowSums<R>{a.g, a.current, a.rowSums, a.radius});
+            launch(GeometryDerivativesKernel{a.g, reproject.derivatives});
+            launch(reproject);
+            AccumulateModulated<R> accumulate = accumulateForm<R>(a);
+            accumulate.reprojected = reproject.reprojected;
+            launch(accumulate);
+        });
+    }
+    void run(const GeometryStep& s) override { launch(s.geometry); }
+    // Split: the bilinear reprojection vectorises; the 3x3 search runs on the few pixels whose
+    // taps all failed (block-sparse), then the accumulation vectorises again.
+    void run(const SvgfTemporalStageStep& s) override {
+        const SvgfAccumulateKernel& a = s.accumulate;
+        if (s.clampRows) launch(ColorRowSumsKernel{a.g, a.radiance, a.rowSums, kSvgfWindowRadius});
+        SvgfReprojectKernel reproject = s.reproject;
+        reproject.history = {svgfHistory_.data(), layout_.planeSize};
+        launch(reproject);
+        launch(svgfReprojectForm<true>(reproject));
+        SvgfAccumulateKernel accumulate = a;
+        accumulate.history = reproject.history;
+        launch(accumulate);
+    }
+    // sigma_n = 128 (the paper's): max(0, n.n')^128 by a polynomial fitted near 1 (svgfWeight),
+    // log2 being no single instruction here.
+    void run(const SvgfVarianceStep& s) override {
+        if (hasPaperSigmaNormal(s.variance.terms))
+            launch(svgfVarianceForm<kPaperSigmaNormal, false>(s.variance));
+        else
+            launch(s.variance);
+    }
+    void run(const SvgfAtrousIterationStep& s) override {
+        const bool sigma128 = hasPaperSigmaNormal(s.iteration.terms);
+        const SvgfAtrousModulatedKernel& k = s.iteration;
+        if (s.modulated)
+            sigma128 ? launch(svgfAtrousForm<kPaperSigmaNormal, true, false>(k)) : launch(k);
+        else
+            sigma128 ? launch(svgfAtrousForm<kPaperSigmaNormal, false, false>(k))
+                     : launch(svgfAtrousForm<-1, false, false>(k));
+    }
+    void run(const ModulateStep& s) override { launch(s.modulate); }
 
     void* allocate(std::size_t bytes) override {
         // 64-byte alignment: whole cache lines, aligned vector loads.
@@ -82,23 +180,26 @@ class CpuDevice final : public Device {
         return {nonFinite, badIds, clamped, missingNormals};
     }
 
-#define RTD_DEFINE_LAUNCH(K)                                       \
-    void launch(const K& kernel, int width, int height) override { \
-        kernels_.run##K(kernel, width, height, scratch_);          \
+  private:
+#define RTD_DEFINE_LAUNCH(K)                                              \
+    void launch(const K& kernel) {                                        \
+        kernels_.run##K(kernel, layout_.width, layout_.height, scratch_); \
     }
-    RTD_FOR_EACH_KERNEL(RTD_DEFINE_LAUNCH)
+    RTD_FOR_EACH_CPU_KERNEL(RTD_DEFINE_LAUNCH)
 #undef RTD_DEFINE_LAUNCH
 
-  private:
     const CpuKernelTable& kernels_;
+    bool tiles_;  // the firefly removal as one tile pass (a tuning for comparisons)
     CpuScratch scratch_;
+    Layout layout_;
+    DeviceBuffer<float> derivatives_, reprojected_, svgfHistory_;  // the split stages' planes
     std::array<std::chrono::steady_clock::time_point, kTimestampSlots> stamps_{};
 };
 
 }  // namespace
 
-std::unique_ptr<Device> createCpuDevice(CpuIsa isa) {
-    return std::make_unique<CpuDevice>(isa);
+std::unique_ptr<Device> createCpuDevice(CpuIsa isa, TilePasses tilePasses) {
+    return std::make_unique<CpuDevice>(isa, tilePasses);
 }
 
 CpuIsa bestCpuIsa() {

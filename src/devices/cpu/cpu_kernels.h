@@ -6,10 +6,44 @@
 #pragma once
 
 #include "devices/cpu/cpu_scratch.h"
-#include "kernels/kernel_list.h"
+#include "devices/steps.h"
 #include "rtdenoise/settings.h"
 
 namespace rtd {
+
+// The kernel forms the CPU device runs (cpu_device.cpp maps the logical steps onto them): planar,
+// split into passes that each vectorise. The GPU's forms (interleaved guide, fused passes) are
+// run on the CPU by the tests only, through parallelFor2D itself.
+#define RTD_FOR_EACH_CPU_KERNEL(X)        \
+    X(IngestKernel)                       \
+    X(LuminanceRowSumsKernel)             \
+    X(LuminanceRowSumsWideKernel)         \
+    X(ColorRowSumsKernel)                 \
+    X(ColorRowSumsWideKernel)             \
+    X(OutlierKernel)                      \
+    X(OutlierWideKernel)                  \
+    X(OutlierTileKernel)                  \
+    X(OutlierClampTileKernel)             \
+    X(JbfKernel)                          \
+    X(JbfNarrowNormalKernel)              \
+    X(AtrousKernel)                       \
+    X(AtrousNarrowNormalKernel)           \
+    X(AtrousModulatedKernel)              \
+    X(AtrousNarrowNormalModulatedKernel)  \
+    X(GeometryDerivativesKernel)          \
+    X(ReprojectKernel)                    \
+    X(AccumulateModulatedKernel)          \
+    X(AccumulateModulatedWideKernel)      \
+    X(SvgfReprojectKernel)                \
+    X(SvgfReprojectSearchKernel)          \
+    X(SvgfAccumulateKernel)               \
+    X(SvgfVarianceKernel)                 \
+    X(SvgfVarianceNormal128Kernel)        \
+    X(SvgfAtrousKernel)                   \
+    X(SvgfAtrousNormal128Kernel)          \
+    X(SvgfAtrousModulatedKernel)          \
+    X(SvgfAtrousNormal128ModulatedKernel) \
+    X(ModulateKernel)
 
 // One entry per kernel: runs it over a width x height grid of pixels on all cores, with the
 // device's scratch memory.
@@ -17,7 +51,7 @@ struct CpuKernelTable {
     CpuIsa isa;
 #define RTD_TABLE_ENTRY(K) \
     void (*run##K)(const K& kernel, int width, int height, CpuScratch& scratch);
-    RTD_FOR_EACH_KERNEL(RTD_TABLE_ENTRY)
+    RTD_FOR_EACH_CPU_KERNEL(RTD_TABLE_ENTRY)
 #undef RTD_TABLE_ENTRY
 };
 

@@ -19,11 +19,12 @@ namespace {
     void run##K(const K& kernel, int width, int height, CpuScratch& scratch) { \
         parallelFor2D(width, height, kernel, &scratch);                        \
     }
-RTD_FOR_EACH_KERNEL(RTD_DEFINE_RUN)
+RTD_FOR_EACH_CPU_KERNEL(RTD_DEFINE_RUN)
 #undef RTD_DEFINE_RUN
 
 #define RTD_TABLE_VALUE(K) &run##K,
-const CpuKernelTable kTable = {CpuIsa::RTD_CPU_ISA_SUFFIX, RTD_FOR_EACH_KERNEL(RTD_TABLE_VALUE)};
+const CpuKernelTable kTable = {CpuIsa::RTD_CPU_ISA_SUFFIX,
+                               RTD_FOR_EACH_CPU_KERNEL(RTD_TABLE_VALUE)};
 #undef RTD_TABLE_VALUE
 
 }  // namespace

@@ -1,6 +1,6 @@
 // Working memory of the CPU launchers besides the kernels' own buffers: each core's rows of
 // A-Trous partner weights (parallel_for.h). The device keeps one, reserved with the denoiser's
-// buffers (Device::reserveAtrousWorkspace); a launch grows it only if it needs more than that
+// buffers (Device::prepare); a launch grows it only if it needs more than that
 // (more OpenMP threads since), so passes and frames allocate nothing.
 #pragma once
 

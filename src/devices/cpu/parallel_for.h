@@ -10,7 +10,7 @@
 
 #include "core/host_device.h"
 #include "devices/cpu/cpu_scratch.h"
-#include "kernels/kernel_list.h"
+#include "kernels/launch_traits.h"
 
 #if defined(__SSE__)
 #include <xmmintrin.h>
@@ -121,7 +121,7 @@ RTD_INLINE void runRow(const Kernel& kernel, int x0, int x1, int y) {
     }
 }
 
-// A kernel with tapRowStride() (kHasTapRowStride, kernel_list.h) reads rows y + k * stride,
+// A kernel with tapRowStride() (kHasTapRowStride, launch_traits.h) reads rows y + k * stride,
 // |k| <= 2 (an A-Trous level). In plain order a row it reads is read again over the next 4 * stride
 // rows, which at wide strides no longer fit a core's L2 cache (strides 8 and 16 at 1080p, 4 to 16
 // at 4K), so there (interleaveRows) the rows are visited in classes of equal y mod stride: y = r,

@@ -3,8 +3,10 @@
 #include <cuda_runtime.h>
 
 #include <string>
+#include <vector>
 
 #include "devices/device.h"
+#include "kernels/launch_traits.h"
 #include "rtdenoise/error.h"
 
 namespace rtd {
@@ -199,7 +201,7 @@ __global__ void countInputFlagsKernel(const std::uint8_t* flags, std::size_t n,
 
 class CudaDevice final : public Device {
   public:
-    CudaDevice() {
+    explicit CudaDevice(TilePasses tilePasses) : tiles_(tilePasses == TilePasses::On) {
         check(cudaGetDevice(&device_), "cudaGetDevice");
         cudaDeviceProp properties{};
         check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
@@ -224,12 +226,91 @@ class CudaDevice final : public Device {
 
     std::string name() const override { return name_; }
     bool sharesHostMemory() const override { return false; }
-    bool hasFastLogarithm() const override { return true; }
-    bool interleavesGuide() const override { return true; }
-    bool prefersFusedPasses() const override { return true; }
-    // The firefly removal's tile pass (OutlierTile) is not the default until timed on a GPU
-    // against the separate passes (bench --device cuda --tile-passes on, then off).
-    bool runsTilePasses() const override { return false; }
+
+    // SVGF's guide interleaved (one 16-byte load per tap): its steps have that form here. The
+    // fused stages keep their intermediates in registers and need no working planes.
+    void prepare(const Layout& layout, const std::vector<StepKind>& steps) override {
+        layout_ = layout;
+        interleaved_ = false;
+        for (StepKind k : steps) interleaved_ = interleaved_ || k == StepKind::SvgfTemporalStage;
+    }
+
+    void run(const IngestStep& s) override {
+        interleaved_ ? launch(ingestForm<true>(s.ingest)) : launch(s.ingest);
+    }
+    void run(const DespeckleStep& s) override {
+        if (tiles_ && s.radius <= kNarrowWindow) {
+            if (s.clampSums.data)
+                launch(OutlierClampTileKernel{s.g, s.in, s.out, s.clampSums, s.radius, s.k});
+            else
+                launch(OutlierTileKernel{s.g, s.in, s.out, {}, s.radius, s.k});
+            return;
+        }
+        if (s.radius <= kNarrowWindow) {
+            launch(LuminanceRowSumsKernel{s.g, s.in, s.rowSums, s.radius});
+            launch(OutlierKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
+        } else {
+            launch(LuminanceRowSumsWideKernel{s.g, s.in, s.rowSums, s.radius});
+            launch(OutlierWideKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
+        }
+        if (s.clampSums.data)
+            launch(ColorRowSumsKernel{s.g, s.out, s.clampSums, kSvgfWindowRadius});
+    }
+    void run(const JbfStep& s) override {
+        const JbfKernel& j = s.jbf;
+        if (oppositeNormalsVanish(j.edges))
+            launch(JbfNarrowNormalKernel{j.g, j.in, j.out, j.radius, j.coordScale, j.edges});
+        else
+            launch(j);
+    }
+    void run(const AtrousLevelStep& s) override {
+        bool narrow = oppositeNormalsVanish(s.level.edges);
+        if (s.modulated)
+            narrow ? launch(atrousForm<true, true>(s.level)) : launch(s.level);
+        else
+            narrow ? launch(atrousForm<true, false>(s.level))
+                   : launch(atrousForm<false, false>(s.level));
+    }
+    // Fused: the history in registers, the slopes computed where needed (ReprojectAccumulate).
+    void run(const TemporalStageStep& s) override {
+        const AccumulateModulatedKernel& a = s.accumulate;
+        if (a.radius <= kNarrowWindow) {
+            launch(ColorRowSumsKernel{a.g, a.current, a.rowSums, a.radius});
+            launch(ReprojectAccumulateKernel{s.reproject, a});
+        } else {
+            launch(ColorRowSumsWideKernel{a.g, a.current, a.rowSums, a.radius});
+            launch(ReprojectAccumulateWideKernel{s.reproject, accumulateForm<kWideWindow>(a)});
+        }
+    }
+    void run(const GeometryStep& s) override {
+        if (interleaved_)
+            launch(GeometryDerivativesInterleavedKernel{s.geometry.g, s.geometry.out});
+        else
+            launch(s.geometry);
+    }
+    // Fused: a pass's intermediate planes would cost a round trip through memory, and the rare
+    // 3x3 search's branch costs only its warp (SvgfTemporal).
+    void run(const SvgfTemporalStageStep& s) override {
+        const SvgfAccumulateKernel& a = s.accumulate;
+        if (s.clampRows) launch(ColorRowSumsKernel{a.g, a.radiance, a.rowSums, kSvgfWindowRadius});
+        if (interleaved_)
+            launch(SvgfTemporalInterleavedKernel{s.reproject, a});
+        else
+            launch(SvgfTemporalKernel{s.reproject, a});
+    }
+    // log2 is one instruction here: max(0, n.n')^sigma as exp2(sigma log2(n.n')) for any sigma.
+    void run(const SvgfVarianceStep& s) override {
+        interleaved_ ? launch(svgfVarianceForm<-1, true>(s.variance)) : launch(s.variance);
+    }
+    void run(const SvgfAtrousIterationStep& s) override {
+        const SvgfAtrousModulatedKernel& k = s.iteration;
+        if (interleaved_)
+            s.modulated ? launch(svgfAtrousForm<-1, true, true>(k))
+                        : launch(svgfAtrousForm<-1, false, true>(k));
+        else
+            s.modulated ? launch(k) : launch(svgfAtrousForm<-1, false, false>(k));
+    }
+    void run(const ModulateStep& s) override { launch(s.modulate); }
 
     void* allocate(std::size_t bytes) override {
         void* p = nullptr;
@@ -318,15 +399,13 @@ class CudaDevice final : public Device {
                 static_cast<long long>(totals[2]), static_cast<long long>(totals[3])};
     }
 
-#define RTD_DEFINE_LAUNCH(K)                                       \
-    void launch(const K& kernel, int width, int height) override { \
-        launchAny(kernel, width, height);                          \
-        check(cudaGetLastError(), #K);                             \
-    }
-    RTD_FOR_EACH_KERNEL(RTD_DEFINE_LAUNCH)
-#undef RTD_DEFINE_LAUNCH
-
   private:
+    template <class Kernel>
+    void launch(const Kernel& kernel) {
+        launchAny(kernel, layout_.width, layout_.height);
+        check(cudaGetLastError(), "kernel launch");
+    }
+
     template <class Kernel>
     void launchAny(const Kernel& kernel, int width, int height) {
         if constexpr (kIsTileKernel<Kernel>) {
@@ -372,6 +451,9 @@ class CudaDevice final : public Device {
         }
     }
 
+    bool tiles_;  // the firefly removal as one tile pass (a tuning for comparisons)
+    bool interleaved_ = false;
+    Layout layout_;
     void* stage_[kStageSlots] = {};
     cudaEvent_t stageFree_[kStageSlots] = {};
     int nextStage_ = 0;
@@ -389,11 +471,11 @@ bool cudaDeviceAvailable() {
     return cudaGetDeviceCount(&count) == cudaSuccess && count > 0;
 }
 
-std::unique_ptr<Device> createCudaDevice() {
+std::unique_ptr<Device> createCudaDevice(TilePasses tilePasses) {
     if (!cudaDeviceAvailable())
         throw Error(ErrorCode::DeviceFailure,
                     "--device cuda: no CUDA GPU is available (driver missing or no device)");
-    return std::make_unique<CudaDevice>();
+    return std::make_unique<CudaDevice>(tilePasses);
 }
 
 }  // namespace rtd

@@ -1,0 +1,151 @@
+// The logical kernels a method's passes name ("the SVGF A-Trous iteration at stride s", "the
+// temporal stage"). Each holds its kernel functors in their reference (planar, separate-pass)
+// form; a device runs it in its own fastest form (cpu_device.cpp: planar, split, pair-sharing;
+// cuda_device.cu: fused, interleaved, paired rows). The functors are the same on both back ends.
+#pragma once
+
+#include "kernels/accumulate.h"
+#include "kernels/atrous.h"
+#include "kernels/ingest.h"
+#include "kernels/jbf.h"
+#include "kernels/modulate.h"
+#include "kernels/outlier.h"
+#include "kernels/outlier_tile.h"
+#include "kernels/reproject.h"
+#include "kernels/svgf.h"
+#include "kernels/window_sums.h"
+
+namespace rtd {
+
+enum class StepKind {
+    Ingest,
+    Despeckle,
+    Jbf,
+    AtrousLevel,
+    TemporalStage,
+    Geometry,
+    SvgfTemporalStage,
+    SvgfVariance,
+    SvgfAtrousIteration,
+    Modulate,
+};
+
+// The frame's buffers into the device's images. Its guide (normal + depth, 4 planes) may be
+// written interleaved: the device reads it back the same way in every step.
+struct IngestStep {
+    IngestKernel ingest;
+};
+
+// Firefly removal of `in` into `out`. clampSums, where set: also the colour row sums of `out`
+// over SVGF's history-clamp window (kSvgfWindowRadius), which the next steps read.
+struct DespeckleStep {
+    GBufferView g;
+    Planes3 in, out;
+    PlaneSet rowSums;  // 7 planes of working memory (the separate passes' window statistics)
+    int radius;
+    float k;
+    PlaneSet clampSums = {};
+};
+
+struct JbfStep {
+    JbfKernel jbf;
+};
+
+// One level of the course's A-Trous filter; modulated: writes the result times the albedo into
+// the output instead of its `out` planes.
+struct AtrousLevelStep {
+    AtrousModulatedKernel level;
+    bool modulated = false;
+};
+
+// The assignment's temporal stage after the spatial filter: the clamp window's row sums of
+// `accumulate.current`, the history test's slopes, the back-projection and the accumulation.
+// reproject.derivatives, reproject.reprojected and accumulate.reprojected are the device's to
+// fill (the split form's working planes).
+struct TemporalStageStep {
+    ReprojectKernel reproject;
+    AccumulateModulatedKernel accumulate;  // its radius picks the window's instantiation
+};
+
+// The depth slopes and normal change per pixel (the history test's, SVGF's edge terms).
+struct GeometryStep {
+    GeometryDerivativesKernel geometry;
+};
+
+// SVGF's reprojection (with the 3x3 search where the bilinear taps fail) and accumulation.
+// reproject.history and accumulate.history are the device's to fill (the split form's working
+// planes). clampRows: first the history clamp's row sums of accumulate.radiance.
+struct SvgfTemporalStageStep {
+    SvgfReprojectKernel reproject;
+    SvgfAccumulateKernel accumulate;
+    bool clampRows = false;
+};
+
+struct SvgfVarianceStep {
+    SvgfVarianceKernel variance;
+};
+
+// Modulated: writes the result times the albedo into the output instead of `out`.
+struct SvgfAtrousIterationStep {
+    SvgfAtrousModulatedKernel iteration;
+    bool modulated = false;
+};
+
+struct ModulateStep {
+    ModulateKernel modulate;
+};
+
+// The same fields in another form of a kernel family (forms differ in template flags only).
+template <bool Interleaved>
+Ingest<Interleaved> ingestForm(const IngestKernel& k) {
+    return {k.layout,     k.beautyRgb,   k.normalRgb, k.positionRgb,    k.depthIn,
+            k.idIn,       k.objectCount, k.albedoRgb, k.albedoEpsilon,  k.beauty,
+            k.albedo,     k.normal,      k.position,  k.depth,          k.objectId,
+            k.inputFlags, k.normalDepth, k.filterKey, k.separateObjects};
+}
+template <bool NarrowNormal, bool Modulated>
+Atrous<NarrowNormal, Modulated> atrousForm(const AtrousModulatedKernel& k) {
+    return {k.g, k.in, k.out, k.stride, k.edges, k.albedo, k.rgbOut};
+}
+template <int MaxRadius>
+AccumulateModulated<MaxRadius> accumulateForm(const AccumulateModulatedKernel& k) {
+    return {k.g,     k.rowSums, k.current, k.reprojected, k.validity, k.out,
+            k.alpha, k.clampK,  k.radius,  k.albedo,      k.rgbOut};
+}
+template <bool Search3x3>
+SvgfReproject<Search3x3> svgfReprojectForm(const SvgfReprojectKernel& k) {
+    return {k.g,
+            k.previous,
+            k.objects,
+            k.objectCount,
+            k.derivatives,
+            k.test,
+            k.previousIllumination,
+            k.previousMoments,
+            k.previousLength,
+            k.history,
+            k.validity,
+            k.hasHistory};
+}
+template <int FixedSigmaNormal, bool Interleaved>
+SvgfVariance<FixedSigmaNormal, Interleaved> svgfVarianceForm(const SvgfVarianceKernel& k) {
+    return {k.g,      k.derivatives, k.illumination, k.moments,
+            k.length, k.out,         k.terms,        k.shortHistory};
+}
+template <int FixedSigmaNormal, bool Modulated, bool Interleaved>
+SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved> svgfAtrousForm(
+    const SvgfAtrousModulatedKernel& k) {
+    return {k.g, k.derivatives, k.in, k.out, k.stride, k.terms, k.albedo, k.rgbOut};
+}
+
+// Calls run.template operator()<MaxRadius>() with the window instantiation (window_sums.h) that
+// covers `radius`: the 7x7 one where it suffices, else the widest.
+template <class Run>
+void forWindow(int radius, Run&& run) {
+    if (radius <= kNarrowWindow)
+        run.template operator()<kNarrowWindow>();
+    else
+        run.template operator()<kWideWindow>();
+}
+
+}  // namespace rtd

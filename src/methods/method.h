@@ -1,0 +1,61 @@
+// The methods (one file each: jbf.cpp, atrous.cpp, temporal.cpp, svgf.cpp) and the passes they
+// share (shared_passes.cpp): the ingest, the firefly removal, the spatial filters, the modulation.
+#pragma once
+
+#include <vector>
+
+#include "methods/pipeline.h"
+#include "rtdenoise/settings.h"
+
+namespace rtd {
+
+// What the ingest writes: every method's inputs in the device's padded planar layout.
+struct FrameImages {
+    ResourceId noisy;       // 3 planes: the beauty, demodulated by the albedo
+    ResourceId albedo;      // 3 planes: the factor (1 without an albedo)
+    ResourceId guide;       // history, 4 planes: normal and depth (the device picks the layout)
+    ResourceId position;    // 3 planes
+    ResourceId objectId;    // history, int32: -1 for background and the border
+    ResourceId filterKeys;  // int32: GBufferView::filterKey
+    ResourceId inputFlags;  // bytes, unpadded: IngestKernel::inputFlags
+    ResourceId windowSums;  // 7 planes: window statistics of the firefly removal and clamps
+};
+
+// Declares `settings.method` into `pipeline`; returns the ingest's images.
+FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings);
+
+FrameImages declareJbf(Pipeline& pipeline, const DenoiserSettings& settings);
+FrameImages declareAtrous(Pipeline& pipeline, const DenoiserSettings& settings);
+FrameImages declareTemporal(Pipeline& pipeline, const DenoiserSettings& settings);
+FrameImages declareSvgf(Pipeline& pipeline, const DenoiserSettings& settings);
+
+// ---- shared passes ----
+
+// The frame's images and the "ingest" pass that writes them.
+FrameImages declareIngest(Pipeline& pipeline, const DenoiserSettings& settings);
+// The resources a GBufferView reads (this frame's guide, position, IDs and filter keys).
+std::vector<ResourceId> gbufferReads(const FrameImages& images);
+std::vector<ResourceId> with(std::vector<ResourceId> ids, std::initializer_list<ResourceId> more);
+GBufferView gbuffer(const PassContext& context, const FrameImages& images);
+// The last frame's IDs and guide, for the history test.
+PreviousGeometry previousGeometry(const PassContext& context, const FrameImages& images);
+HistoryTest historyTest(const HistorySettings& settings);
+
+// The "outlier" pass where firefly removal is on; returns the image the filters read (the
+// despeckled one, or the noisy one). clampSums: it also leaves the colour row sums of its result
+// over SVGF's clamp window in windowSums.
+ResourceId declareDespeckle(Pipeline& pipeline, const DenoiserSettings& settings,
+                            const FrameImages& images, bool clampSums = false);
+// The spatial filter of `in` into `out`; modulateLast: its last A-Trous level writes the output
+// (times the albedo) instead. `scratch`: the A-Trous levels' second image.
+void declareSpatialFilter(Pipeline& pipeline, const DenoiserSettings& settings,
+                          const FrameImages& images, SpatialFilter filter, ResourceId in,
+                          ResourceId out, ResourceId scratch, bool modulateLast);
+// "modulate": the albedo multiplied back into `source` (its first three planes), written into
+// the output.
+void declareModulate(Pipeline& pipeline, const FrameImages& images, ResourceId source);
+
+// An image of `planes` float planes, zero (its border too).
+ResourceDecl floatImage(std::string name, int planes, Lifetime lifetime = Lifetime::Frame);
+
+}  // namespace rtd

@@ -1,0 +1,174 @@
+// The passes several methods share: the ingest, the firefly removal, the spatial filters (JBF,
+// A-Trous levels) and the modulation.
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "methods/method.h"
+#include "rtdenoise/error.h"
+
+namespace rtd {
+namespace {
+
+EdgeStoppingTerms edgeTerms(const EdgeStoppingSettings& s) {
+    return {1.0f / (2.0f * s.sigmaColor * s.sigmaColor),
+            1.0f / (2.0f * s.sigmaNormal * s.sigmaNormal),
+            1.0f / (2.0f * s.sigmaPlane * s.sigmaPlane)};
+}
+
+// How far a window kernel of this radius reads (its compile-time width, window_sums.h).
+int windowReach(int radius) {
+    return radius <= kNarrowWindow ? kNarrowWindow : kWideWindow;
+}
+
+}  // namespace
+
+FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings) {
+    switch (settings.method) {
+        case Method::Jbf:
+            return declareJbf(pipeline, settings);
+        case Method::Atrous:
+            return declareAtrous(pipeline, settings);
+        case Method::Temporal:
+            return declareTemporal(pipeline, settings);
+        case Method::Svgf:
+            return declareSvgf(pipeline, settings);
+    }
+    throw Error(ErrorCode::InvalidArgument, "settings: unknown method");
+}
+
+ResourceDecl floatImage(std::string name, int planes, Lifetime lifetime) {
+    return {.name = std::move(name), .planes = planes, .lifetime = lifetime};
+}
+
+std::vector<ResourceId> gbufferReads(const FrameImages& f) {
+    return {f.guide, f.position, f.objectId, f.filterKeys};
+}
+
+std::vector<ResourceId> with(std::vector<ResourceId> ids, std::initializer_list<ResourceId> more) {
+    ids.insert(ids.end(), more);
+    return ids;
+}
+
+GBufferView gbuffer(const PassContext& c, const FrameImages& f) {
+    float* guide = c.floats(f.guide);
+    int planeSize = c.layout().planeSize;
+    // Normal planes then depth, or both interleaved (NormalDepth4): the device's steps read it
+    // in the form its ingest wrote.
+    return {c.layout(),           {guide, planeSize},
+            c.planes(f.position), guide + 3 * std::size_t(planeSize),
+            c.ints(f.objectId),   {guide},
+            c.ints(f.filterKeys)};
+}
+
+PreviousGeometry previousGeometry(const PassContext& c, const FrameImages& f) {
+    float* guide = c.floats(previous(f.guide));
+    int planeSize = c.layout().planeSize;
+    return {c.ints(previous(f.objectId)),
+            guide + 3 * std::size_t(planeSize),
+            {guide, planeSize},
+            {guide}};
+}
+
+HistoryTest historyTest(const HistorySettings& s) {
+    return {s.geometryTests ? 1 : 0, s.depthTolerance, s.normalTolerance};
+}
+
+FrameImages declareIngest(Pipeline& p, const DenoiserSettings& settings) {
+    FrameImages f;
+    f.noisy = p.declare(floatImage("noisy", 3));
+    f.albedo = p.declare(floatImage("albedo", 3));
+    f.guide = p.declare(floatImage("guide", 4, Lifetime::History));
+    f.position = p.declare(floatImage("position", 3));
+    // -1 everywhere: the border reads as background.
+    f.objectId = p.declare({.name = "objectId",
+                            .element = Element::Int32,
+                            .lifetime = Lifetime::History,
+                            .fillByte = 0xff});
+    f.filterKeys = p.declare({.name = "filterKeys", .element = Element::Int32, .fillByte = 0xff});
+    f.inputFlags = p.declare({.name = "inputFlags", .element = Element::Byte, .padded = false});
+    bool temporal = settings.method == Method::Temporal || settings.method == Method::Svgf;
+    if (temporal || settings.outlier.enabled) f.windowSums = p.declare(floatImage("windowSums", 7));
+    const float epsilon = settings.albedo.epsilon;
+    const int separateObjects = settings.edges.separateObjects ? 1 : 0;
+    p.addPass(
+        "ingest", StepKind::Ingest, {p.frame()},
+        {f.noisy, f.albedo, f.guide, f.position, f.objectId, f.filterKeys, f.inputFlags}, 0,
+        [f, epsilon, separateObjects](const PassContext& c) {
+            const FrameBinding& in = c.frame();
+            GBufferView g = gbuffer(c, f);
+            c.device().run(IngestStep{
+                {c.layout(), in.beauty, in.normal, in.position, in.depth, in.objectId,
+                 in.objectCount, in.albedo, epsilon, c.planes(f.noisy), c.planes(f.albedo),
+                 g.normal, c.planes(f.position), const_cast<float*>(g.depth), c.ints(f.objectId),
+                 c.bytes(f.inputFlags), g.normalDepth, c.ints(f.filterKeys), separateObjects}});
+        });
+    return f;
+}
+
+ResourceId declareDespeckle(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f,
+                            bool clampSums) {
+    if (!settings.outlier.enabled) return f.noisy;
+    ResourceId despeckled = p.declare(floatImage("despeckled", 3));
+    const int radius = settings.outlier.radius;
+    const float k = settings.outlier.k;
+    p.addPass(
+        "outlier", StepKind::Despeckle, with(gbufferReads(f), {f.noisy}),
+        {despeckled, f.windowSums},
+        clampSums ? std::max(windowReach(radius), kSvgfWindowRadius) : windowReach(radius),
+        [f, despeckled, radius, k, clampSums](const PassContext& c) {
+            c.device().run(DespeckleStep{gbuffer(c, f), c.planes(f.noisy), c.planes(despeckled),
+                                         c.planeSet(f.windowSums), radius, k,
+                                         clampSums ? c.planeSet(f.windowSums) : PlaneSet{}});
+        });
+    return despeckled;
+}
+
+void declareSpatialFilter(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f,
+                          SpatialFilter filter, ResourceId in, ResourceId out, ResourceId scratch,
+                          bool modulateLast) {
+    const EdgeStoppingTerms edges = edgeTerms(settings.edges);
+    if (filter == SpatialFilter::Jbf) {
+        const int radius = settings.jbf.radius;
+        const float coordScale = 1.0f / (2.0f * settings.jbf.sigmaCoord * settings.jbf.sigmaCoord);
+        p.addPass("jbf", StepKind::Jbf, with(gbufferReads(f), {in}), {out}, radius,
+                  [f, in, out, radius, coordScale, edges](const PassContext& c) {
+                      c.device().run(JbfStep{
+                          {gbuffer(c, f), c.planes(in), c.planes(out), radius, coordScale, edges}});
+                  });
+        return;
+    }
+    // The levels ping-pong between `out` and `scratch`, ending in `out`.
+    const int levels = settings.atrous.passes;
+    ResourceId src = in;
+    for (int level = 0; level < levels; ++level) {
+        const bool modulated = modulateLast && level == levels - 1;
+        const ResourceId dst = ((levels - 1 - level) % 2) == 0 ? out : scratch;
+        const int stride = 1 << level;
+        std::vector<ResourceId> reads = with(gbufferReads(f), {src});
+        if (modulated) reads.push_back(f.albedo);
+        p.addPass(fmt::format("atrous{}", level), StepKind::AtrousLevel, reads,
+                  {modulated ? p.output() : dst}, 2 * stride,
+                  [f, src, dst, stride, edges, modulated](const PassContext& c) {
+                      AtrousModulatedKernel level{gbuffer(c, f), c.planes(src), {}, stride, edges};
+                      if (modulated) {
+                          level.albedo = c.planes(f.albedo);
+                          level.rgbOut = c.output();
+                      } else {
+                          level.out = c.planes(dst);
+                      }
+                      c.device().run(AtrousLevelStep{level, modulated});
+                  });
+        src = dst;
+    }
+}
+
+void declareModulate(Pipeline& p, const FrameImages& f, ResourceId source) {
+    p.addPass("modulate", StepKind::Modulate, {source, f.albedo}, {p.output()}, 0,
+              [f, source](const PassContext& c) {
+                  c.device().run(
+                      ModulateStep{{c.layout(), c.planes(source), c.planes(f.albedo), c.output()}});
+              });
+}
+
+}  // namespace rtd
