@@ -14,6 +14,7 @@
 #include "baseline_jbf.h"
 #include "core/frame_order.h"
 #include "rtdenoise/rtdenoise.h"
+#include "tuning.h"
 
 namespace {
 
@@ -44,8 +45,7 @@ struct SteadyState {
               settings.method = method;
               settings.device = device;
               settings.temporal.spatialFilter = filter;
-              settings.tilePasses = tilePasses;
-              return settings;
+              return makeTunedDenoiser(settings, {CpuIsa::Auto, tilePasses});
           }()) {
         for (const Frame& f : frames()) denoiser.processFrame(f, output);
     }
@@ -140,8 +140,8 @@ void runPass(benchmark::State& state, Method method, std::size_t pass,
     state.SetLabel(run.denoiser.passes()[pass].name);
 }
 
-// The passes a pipeline with these settings has, and (tile passes on, the device's default
-// off) the tile passes: BM_Pass/<prefix>/<pass name>.
+// The passes a pipeline with these settings has (BM_Pass/<prefix>/<pass name>), and the firefly
+// removal in its tile form (BM_Pass/<prefix>/outlier-tile; the device's default is off).
 void registerPassesOf(Method method, DeviceType device, const std::string& prefix, int iterations) {
     DenoiserSettings settings;
     settings.method = method;
@@ -152,8 +152,6 @@ void registerPassesOf(Method method, DeviceType device, const std::string& prefi
     } catch (const Error&) {
         return;  // no such device here
     }
-    settings.tilePasses = TilePasses::On;
-    Denoiser tiled(settings);
     auto add = [&](const std::string& name, std::size_t p, TilePasses tiles) {
         benchmark::RegisterBenchmark(("BM_Pass/" + prefix + "/" + name).c_str(),
                                      [method, p, device, tiles](benchmark::State& state) {
@@ -167,12 +165,8 @@ void registerPassesOf(Method method, DeviceType device, const std::string& prefi
     };
     for (std::size_t p = 0; p < probe->passes().size(); ++p)
         add(probe->passes()[p].name, p, TilePasses::Auto);
-    for (std::size_t p = 0; p < tiled.passes().size(); ++p) {
-        const std::string& name = tiled.passes()[p].name;
-        bool inDefault = false;
-        for (const PassInfo& q : probe->passes()) inDefault = inDefault || q.name == name;
-        if (!inDefault) add(name, p, TilePasses::On);
-    }
+    for (std::size_t p = 0; p < probe->passes().size(); ++p)
+        if (probe->passes()[p].name == "outlier") add("outlier-tile", p, TilePasses::On);
 }
 
 void registerPassBenchmarks() {

@@ -11,6 +11,7 @@
 #include "devices/device.h"
 #include "methods/method.h"
 #include "rtdenoise/error.h"
+#include "tuning.h"
 
 namespace rtd {
 namespace {
@@ -91,9 +92,9 @@ struct Denoiser::Impl {
     // Per frame: the caller's buffers as the device sees them.
     InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo;
 
-    explicit Impl(const DenoiserSettings& s) : settings(s) {
+    Impl(const DenoiserSettings& s, const DeviceTuning& tuning) : settings(s) {
         validate(settings);
-        device = createDevice(settings.device, settings.cpuIsa, settings.tilePasses);
+        device = createDevice(settings.device, tuning.cpuIsa, tuning.tilePasses);
         images = declareMethod(pipeline, settings);
         stats.passMilliseconds.assign(pipeline.passes().size(), 0.0);
     }
@@ -248,7 +249,12 @@ struct Denoiser::Impl {
     }
 };
 
-Denoiser::Denoiser(const DenoiserSettings& settings) : impl_(std::make_unique<Impl>(settings)) {}
+Denoiser::Denoiser(const DenoiserSettings& settings) : Denoiser(settings, DeviceTuning{}) {}
+Denoiser::Denoiser(const DenoiserSettings& settings, const DeviceTuning& tuning)
+    : impl_(std::make_unique<Impl>(settings, tuning)) {}
+Denoiser makeTunedDenoiser(const DenoiserSettings& settings, const DeviceTuning& tuning) {
+    return Denoiser(settings, tuning);
+}
 Denoiser::~Denoiser() = default;
 Denoiser::Denoiser(Denoiser&&) noexcept = default;
 Denoiser& Denoiser::operator=(Denoiser&&) noexcept = default;

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "rtdenoise/error.h"
+#include "tuning.h"
 
 namespace rtd {
 namespace {

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "test_support.h"
+#include "tuning.h"
 
 namespace rtd {
 namespace {
@@ -16,9 +17,8 @@ using test::SceneDescription;
 
 const Method kEveryMethod[] = {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf};
 
-DenoiserSettings settingsFor(Method method, CpuIsa isa = CpuIsa::Auto) {
+DenoiserSettings settingsFor(Method method) {
     DenoiserSettings s = test::cpuSettings(method);
-    s.cpuIsa = isa;
     s.jbf.radius = 6;  // small frames
     return s;
 }
@@ -69,9 +69,9 @@ TEST(BadValues, HugeFiniteRadianceGivesAFiniteResult) {
         for (CpuIsa isa : {CpuIsa::Scalar, CpuIsa::Auto}) {
             for (Method method : kEveryMethod) {
                 for (bool outlier : {true, false}) {
-                    DenoiserSettings s = settingsFor(method, isa);
+                    DenoiserSettings s = settingsFor(method);
                     s.outlier.enabled = outlier;
-                    Denoiser denoiser(s);
+                    Denoiser denoiser = makeTunedDenoiser(s, {isa});
                     for (int frame = 0; frame < 3; ++frame) {
                         Frame f = makeFrame(texturedScene());
                         test::addNoise(f, 0.1f, unsigned(frame));

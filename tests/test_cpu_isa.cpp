@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "test_support.h"
+#include "tuning.h"
 
 namespace rtd {
 namespace {
@@ -26,10 +27,8 @@ TEST_P(CpuIsaTest, AgreesWithTheScalarKernels) {
         DenoiserSettings s;
         s.method = method;
         s.device = DeviceType::Cpu;
-        s.cpuIsa = CpuIsa::Scalar;
-        Denoiser scalar(s);
-        s.cpuIsa = isa;
-        Denoiser vector(s);
+        Denoiser scalar = makeTunedDenoiser(s, {CpuIsa::Scalar});
+        Denoiser vector = makeTunedDenoiser(s, {isa});
         EXPECT_NE(vector.deviceName().find(toString(isa)), std::string::npos)
             << vector.deviceName();
         for (std::size_t i = 0; i < renderedFrames().size(); ++i) {
@@ -52,20 +51,18 @@ TEST(CpuIsa, AutoPicksTheWidestSetThisProcessorSupports) {
     DenoiserSettings s;
     s.device = DeviceType::Cpu;
     Denoiser automatic(s);
-    s.cpuIsa = best;
-    Denoiser chosen(s);
+    Denoiser chosen = makeTunedDenoiser(s, {best});
     EXPECT_EQ(automatic.deviceName(), chosen.deviceName());
     EXPECT_NE(automatic.deviceName().find(toString(best)), std::string::npos)
         << automatic.deviceName();
     // A wider set than the processor has is refused, naming it (not testable on AVX-512).
     if (best != CpuIsa::Avx512) {
-        s.cpuIsa = CpuIsa(int(best) + 1);
+        const CpuIsa wider = CpuIsa(int(best) + 1);
         try {
-            Denoiser refused(s);
-            ADD_FAILURE() << toString(s.cpuIsa) << " was accepted";
+            Denoiser refused = makeTunedDenoiser(s, {wider});
+            ADD_FAILURE() << toString(wider) << " was accepted";
         } catch (const Error& e) {
-            EXPECT_NE(std::string(e.what()).find(toString(s.cpuIsa)), std::string::npos)
-                << e.what();
+            EXPECT_NE(std::string(e.what()).find(toString(wider)), std::string::npos) << e.what();
         }
     }
 }

@@ -7,6 +7,7 @@
 #include "devices/device.h"
 #include "methods/method.h"
 #include "test_support.h"
+#include "tuning.h"
 
 namespace rtd {
 namespace {
@@ -505,10 +506,8 @@ TEST(Denoiser, TilePassesGiveTheSeparatePassesResult) {
     std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 70, 45, 3);
     for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf}) {
         DenoiserSettings s = settingsFor(method);
-        s.tilePasses = TilePasses::Off;
-        Denoiser separate(s);
-        s.tilePasses = TilePasses::On;
-        Denoiser tiled(s);
+        Denoiser separate = makeTunedDenoiser(s, {CpuIsa::Auto, TilePasses::Off});
+        Denoiser tiled = makeTunedDenoiser(s, {CpuIsa::Auto, TilePasses::On});
         // The same logical passes: the device picks the form.
         EXPECT_EQ(separate.passes().size(), tiled.passes().size());
         for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -521,10 +520,8 @@ TEST(Denoiser, TilePassesGiveTheSeparatePassesResult) {
     std::vector<Frame> two(frames.begin(), frames.begin() + 2);
     DenoiserSettings s = settingsFor(Method::Svgf);
     s.outlier.radius = 4;
-    s.tilePasses = TilePasses::Off;
-    Denoiser separate(s);
-    s.tilePasses = TilePasses::On;
-    Denoiser tiled(s);
+    Denoiser separate = makeTunedDenoiser(s, {CpuIsa::Auto, TilePasses::Off});
+    Denoiser tiled = makeTunedDenoiser(s, {CpuIsa::Auto, TilePasses::On});
     for (const Frame& f : two)
         EXPECT_EQ(test::maxRelativeDifference(separate.processFrame(f), tiled.processFrame(f)),
                   0.0);

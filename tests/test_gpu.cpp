@@ -12,6 +12,7 @@
 #endif
 
 #include "test_support.h"
+#include "tuning.h"
 
 namespace rtd {
 namespace {
@@ -39,8 +40,7 @@ void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what,
         s.device = DeviceType::Cpu;
         Denoiser cpu(s);
         s.device = DeviceType::Cuda;
-        s.tilePasses = gpuTilePasses;
-        Denoiser gpu(s);
+        Denoiser gpu = makeTunedDenoiser(s, {CpuIsa::Auto, gpuTilePasses});
         for (std::size_t i = 0; i < frames.size(); ++i) {
             Image a = cpu.processFrame(frames[i]), b = gpu.processFrame(frames[i]);
             double difference = test::maxRelativeDifference(a, b);
@@ -111,8 +111,7 @@ TEST(Gpu, CudaHandlesBadValuesAsTheCpuDoes) {
             s.device = DeviceType::Cpu;
             Denoiser cpu(s);
             s.device = DeviceType::Cuda;
-            s.tilePasses = tiles;
-            Denoiser gpu(s);
+            Denoiser gpu = makeTunedDenoiser(s, {CpuIsa::Auto, tiles});
             for (std::size_t i = 0; i < frames.size(); ++i) {
                 Image a = cpu.processFrame(frames[i]), b = gpu.processFrame(frames[i]);
                 for (float v : b.pixels) ASSERT_TRUE(std::isfinite(v)) << toString(method);

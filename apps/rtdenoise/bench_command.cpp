@@ -160,11 +160,10 @@ int runBench(const BenchOptions& o) {
                 DenoiserSettings settings;
                 settings.method = kBenchMethods.at(methodName);
                 settings.device = kBenchDevices.at(deviceName).type;
-                settings.cpuIsa = kBenchDevices.at(deviceName).isa;
-                settings.tilePasses = o.tilePasses;
+                DeviceTuning tuning{kBenchDevices.at(deviceName).isa, o.tilePasses};
                 std::unique_ptr<Denoiser> created;
                 try {
-                    created = std::make_unique<Denoiser>(settings);
+                    created = std::make_unique<Denoiser>(makeTunedDenoiser(settings, tuning));
                 } catch (const Error& e) {
                     // A device or instruction set this machine lacks: say so, time the rest.
                     if (e.code() != ErrorCode::DeviceFailure) throw;

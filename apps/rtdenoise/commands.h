@@ -6,6 +6,7 @@
 #include <functional>
 
 #include "rtdenoise/settings.h"
+#include "tuning.h"
 
 namespace rtd::cli {
 
@@ -26,7 +27,7 @@ void applyConfigFile(CLI::App& command, const std::filesystem::path& file);
 // Registers every denoiser setting as an option of `command` (shared by denoise and bench).
 void addDenoiserOptions(CLI::App& command, DenoiserSettings& settings);
 
-// The --tile-passes option (auto|on|off, any case) into `target`; bench has it too.
+// The bench's --tile-passes option (auto|on|off, any case) into `target`.
 void addTilePassesOption(CLI::App& command, TilePasses& target, const std::string& help);
 
 }  // namespace rtd::cli

@@ -44,11 +44,6 @@ const std::map<std::string, SpatialFilter> kFilters{{"jbf", SpatialFilter::Jbf},
                                                     {"atrous", SpatialFilter::Atrous}};
 const std::map<std::string, DeviceType> kDevices{
     {"cpu", DeviceType::Cpu}, {"cuda", DeviceType::Cuda}, {"auto", DeviceType::Auto}};
-const std::map<std::string, CpuIsa> kCpuIsas{{"auto", CpuIsa::Auto},
-                                             {"scalar", CpuIsa::Scalar},
-                                             {"sse2", CpuIsa::Sse2},
-                                             {"avx2", CpuIsa::Avx2},
-                                             {"avx512", CpuIsa::Avx512}};
 const std::map<std::string, TilePasses> kTilePasses{
     {"auto", TilePasses::Auto}, {"on", TilePasses::On}, {"off", TilePasses::Off}};
 
@@ -335,12 +330,6 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
               "Spatial filter of the temporal method", "jbf|atrous");
     addChoice(c, "--device", s.device, kDevices,
               "Compute device (auto picks a GPU when there is one)", "cpu|cuda|auto");
-    addChoice(c, "--cpu-isa", s.cpuIsa, kCpuIsas,
-              "Instruction set of the CPU kernels (auto: the widest this processor has)",
-              "auto|scalar|sse2|avx2|avx512");
-    addTilePassesOption(c, s.tilePasses,
-                        "Firefly removal (and svgf's clamp-window row sums) as one tile pass (on) "
-                        "or separate passes (off); the same result (auto: the device's choice)");
     c.add_option("--sigma-color", s.edges.sigmaColor, "[>=1e-6] colour edge-stopping sigma")
         ->capture_default_str();
     c.add_option("--sigma-normal", s.edges.sigmaNormal,

@@ -11,6 +11,8 @@
 
 namespace rtd {
 
+struct DeviceTuning;  // comparisons and tests only (not installed: src/tuning.h)
+
 // One pass of a method's pipeline, with the buffers it reads and writes (for reading the
 // pipeline and timing it).
 struct PassInfo {
@@ -73,13 +75,13 @@ class Denoiser {
     Image reprojectionDebugImage() const { return debugImage(DebugView::Reprojection); }
 
   private:
+    friend Denoiser makeTunedDenoiser(const DenoiserSettings&, const DeviceTuning&);
+    Denoiser(const DenoiserSettings& settings, const DeviceTuning& tuning);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
 
 // The GPU --device cuda would use ("" in a build without CUDA or on a machine without a GPU).
 std::string gpuName();
-// The CPU instruction set --cpu-isa auto picks on this processor.
-CpuIsa bestCpuInstructionSet();
 
 }  // namespace rtd

@@ -23,17 +23,6 @@ constexpr float kMinSigma = 1e-6f;
 
 enum class DeviceType { Cpu, Cuda, Auto };
 
-// The CPU kernels' instruction set. Auto: the widest this processor and build support. Scalar:
-// the same kernels not vectorised (one pixel at a time), the baseline speed-ups are quoted against.
-enum class CpuIsa { Auto, Scalar, Sse2, Avx2, Avx512 };
-
-// How the firefly removal runs: as one tile pass, its window statistics kept on chip (shared
-// memory on a GPU) and SVGF's history-clamp row sums computed with it, or as separate passes
-// over planes in memory. The result is the same up to rounding. Windows of radius over 3 always
-// run separately. Auto: the device's choice (the CPU: separate, 2.3x faster there; a GPU:
-// separate until the tile pass is timed on one).
-enum class TilePasses { Auto, On, Off };
-
 // Edge-stopping terms shared by the JBF and the A-Trous filter.
 struct EdgeStoppingSettings {
     float sigmaColor =
@@ -102,8 +91,6 @@ struct TemporalSettings {
 struct DenoiserSettings {
     Method method = Method::Svgf;  // the best on every rendered scene (README quality table)
     DeviceType device = DeviceType::Auto;
-    CpuIsa cpuIsa = CpuIsa::Auto;  // CPU device only; a narrower set is for comparisons and tests
-    TilePasses tilePasses = TilePasses::Auto;  // another choice is for comparisons and tests
     EdgeStoppingSettings edges;
     JbfSettings jbf;
     AtrousSettings atrous;
@@ -120,7 +107,5 @@ void validate(const DenoiserSettings& settings);
 const char* toString(Method method);
 const char* toString(SpatialFilter filter);
 const char* toString(DeviceType device);
-const char* toString(CpuIsa isa);
-const char* toString(TilePasses tilePasses);
 
 }  // namespace rtd

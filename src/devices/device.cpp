@@ -5,6 +5,7 @@
 #include "devices/cpu/cpu_kernels.h"
 #include "rtdenoise/denoiser.h"
 #include "rtdenoise/error.h"
+#include "tuning.h"
 
 namespace rtd {
 

@@ -9,6 +9,7 @@
 
 #include "devices/steps.h"
 #include "rtdenoise/settings.h"
+#include "tuning.h"
 
 namespace rtd {
 
@@ -74,7 +75,7 @@ class Device {
 void parallelCopy(void* dst, const void* src, std::size_t bytes);
 
 // Throws rtd::Error(DeviceFailure) if the requested device is not available.
-// cpuIsa and tilePasses: the comparisons' tuning (settings.h); Auto is the device's choice.
+// cpuIsa and tilePasses: the comparisons' tuning (tuning.h); Auto is the device's choice.
 std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa = CpuIsa::Auto,
                                      TilePasses tilePasses = TilePasses::Auto);
 std::unique_ptr<Device> createCpuDevice(CpuIsa isa = CpuIsa::Auto,

@@ -213,7 +213,7 @@ int main(int argc, char** argv) {
         {"method.toml", "method = \"jbf\"\nradius = 8\nsigma-color = 0.8\n"},
         {"svgf.toml",
          " method = \"svgf\"\nsvgf-iterations = 5\nsvgf_feedback = 1\n"
-         "svgf-max-history = 32\nsvgf-clamp-k = 1.5\ntile-passes = \"ON\"\n"},
+         "svgf-max-history = 32\nsvgf-clamp-k = 1.5\n"},
         {"temporal.ini",
          "# temporal with the A-Trous filter\n[denoise]\nmethod=temporal\n"
          "spatial-filter=atrous\nalpha=0.2\nclamp-k=1.0\nclamp-radius=3\n"},
@@ -221,7 +221,7 @@ int main(int argc, char** argv) {
          " outlier = false\nno-albedo = true\ngeometry-tests = true\n"
          "separate-objects = false\noutlier-radius = 2\noutlier-k = 3\n"},
         {"device.toml",
-         "device = \"cpu\"\ncpu-isa = \"avx2\"\nframes = 3\npng = true\n"
+         "device = \"cpu\"\nframes = 3\npng = true\n"
          "exposure = 1.5\nfps = 30\nquiet = true\n"},
         {"paths.toml",
          " output = \"out dir\"\nvideo = \"v.mp4\"\ndebug = true\n"
