@@ -1,6 +1,8 @@
 // The library from a renderer: hand each frame's radiance and G-buffer to a Denoiser, get the
-// denoised radiance back. Here a flat grey wall with noise stands in for the renderer.
-#include <rtdenoise/rtdenoise.h>
+// denoised radiance back. Here a flat grey wall with noise, built in memory, stands in for the
+// renderer: rtdenoise::rtdenoise alone, no image files (those are rtdenoise::rtdenoise_io's).
+#include <rtdenoise/denoiser.h>
+#include <rtdenoise/error.h>
 
 #include <cstdio>
 #include <random>
