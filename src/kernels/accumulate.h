@@ -52,8 +52,8 @@ using AccumulateModulated = Accumulate<MaxRadius, true>;
 using AccumulateModulatedKernel = AccumulateModulated<kNarrowWindow>;
 using AccumulateModulatedWideKernel = AccumulateModulated<kWideWindow>;
 
-// The reprojection and the (modulated) accumulation as one pass, for a device that
-// prefersFusedPasses (a GPU): the history stays in registers instead of going through the
+// The reprojection and the (modulated) accumulation as one pass, the temporal stage's fused form
+// (a GPU's, cuda_device.cu): the history stays in registers instead of going through the
 // reprojected planes and back (as SvgfTemporal does for SVGF), and the depth slopes and normal
 // change the history test needs are computed here from the neighbours (GeometryDerivatives)
 // instead of read from a geometry pass's planes. Its `reproject.derivatives` and

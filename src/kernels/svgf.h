@@ -1,5 +1,6 @@
 // Spatiotemporal variance-guided filtering (Schied et al., HPG 2017; reference: Falcor's
-// SVGFPass). Albedo demodulation happens in the ingest and modulation in ModulateKernel, for
+// SVGFPass). Its kernels in one header (~600 lines): they share the centre, weight and history
+// helpers, and each has a CPU and a GPU form over the same arithmetic. Albedo demodulation happens in the ingest and modulation in ModulateKernel, for
 // every method. Passes: temporal (reproject, accumulate illumination and the
 // luminance moments with a per-pixel history length), variance (temporal from the moments, or a
 // 7x7 edge-aware spatial estimate where the history is short), A-Trous iterations guided by the

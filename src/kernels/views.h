@@ -102,7 +102,7 @@ struct GBufferView {
     Planes3 position;
     const float* depth = nullptr;
     const std::int32_t* objectId = nullptr;  // -1: background and border
-    NormalDepth4 normalDepth = {};  // null unless the device interleaves the guide (device.h)
+    NormalDepth4 normalDepth = {};  // the same memory as normal + depth: read where the device interleaves the guide (steps.h)
     // The edge-aware filters' tap test: a tap mixes in where its key equals the centre's, one
     // comparison per tap. Written by the ingest: -1 on background; on an object pixel its object
     // ID where objects are kept apart (the default), 0 otherwise, plus kWithoutNormalKey where

@@ -1,3 +1,5 @@
+// The test-scene path tracer (~670 lines, a tool beside the library, not in it): BVH, materials,
+// lights and the sampler are one unit, read together when a reference looks wrong.
 #include "render/path_tracer.h"
 
 #include <algorithm>

@@ -226,10 +226,10 @@ const CpuKernelTable& cpuKernels(CpuIsa isa) {
                                                         : cpuKernelsScalar();
     if (!table)
         throw Error(ErrorCode::DeviceFailure,
-                    std::string("--cpu-isa ") + toString(isa) + ": this build has no such kernels");
+                    std::string("cpu kernels ") + toString(isa) + ": this build has none");
     if (int(isa) > int(best))
         throw Error(ErrorCode::DeviceFailure,
-                    std::string("--cpu-isa ") + toString(isa) +
+                    std::string("cpu kernels ") + toString(isa) +
                         ": this processor does not support it (best: " + toString(best) + ")");
     return *table;
 }

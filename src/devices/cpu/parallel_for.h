@@ -284,7 +284,7 @@ void parallelRowsSharingPairs(int width, int height, const Kernel& kernel, RowOf
 
 // What a SharesPairs kernel needs of the scratch: the ring of every core at the widest
 // stride any level can have (padding / 2), so that one allocation serves every level (the
-// device reserves it with the denoiser's buffers: reserveAtrousWorkspace).
+// device reserves it with the denoiser's buffers: Device::prepare).
 inline std::size_t sharingScratchFloats(int width, int height, int padding) {
     std::size_t most = 0;
     for (int stride = 1; 2 * stride <= padding && stride < height; stride *= 2) {

@@ -18,31 +18,13 @@ void check(cudaError_t status, const char* what) {
                     std::string("cuda: ") + what + ": " + cudaGetErrorString(status));
 }
 
-// Blocks of 128 threads. The register budget is set per kernel by __launch_bounds__'s minimum of
-// resident blocks per SM: 6 (the default) caps a thread at 85 registers, 5 at 102, 4 at 128.
-// Unbounded, the fully unrolled 5x5 filters took up to 255 registers (1 block per SM). Measured on
-// an H100 at 1080p (bench --size 1920x1080), each kernel against 256-thread blocks of 85 and 128
-// registers and 128-thread blocks of 73-128:
-// - the default, 85 (as 3 blocks of 256 were): JBF, reprojection, accumulation and the small
-//   passes, which the cap does not make spill; the accumulations 7% faster than with 256 threads;
-// - 128 for the A-Trous iterations, whose unrolled taps in +/- pairs spill under 85 (up to 132
-//   bytes per thread): 0.196-0.242 -> 0.176-0.195 ms;
-// - 102 for SVGF's A-Trous iterations and its variance (which spilled 1 KB per thread under 85):
-//   0.131-0.165 -> 0.123-0.140 ms, the variance 0.108 -> 0.058. With the guide interleaved
-//   (views.h: NormalDepth4) the variance is back at the default: 0.054 -> 0.051 ms.
+// Blocks of 128 threads. Each kernel's register budget is set by __launch_bounds__'s minimum of
+// resident blocks per SM (LaunchTraits): 6 (the default) caps a thread at 85 registers, 5 at
+// 102, 4 at 128, 3 at 170; each family's is the fastest measured (docs/performance-gpu.md).
 constexpr int kThreadsPerBlock = 128;
 
 // The A-Trous iterations with their stride as a compile-time constant (Kernel::filter<Stride>):
-// each tap row then needs one address per plane, its five taps' loads taking their column
-// offsets as immediates (the iteration's integer multiply-adds 247-261 -> 65-74 per thread). With
-// the budget of the runtime-stride kernels they stalled longer on their loads (SVGF's at stride 4:
-// 13% fewer instructions, 14% slower); with more registers they are faster. Measured on the H100
-// at 1080p (2-3 runs, medians), against the runtime stride:
-// - the course's A-Trous at strides 1-8, 170 registers: 0.176, 0.178, 0.182, 0.182 -> 0.156,
-//   0.156, 0.163, 0.159 ms (128 registers: 0.147, 0.159, 0.176, 0.175);
-// - SVGF's at strides 1-16, 128 registers: 0.125, 0.126, 0.129, 0.130, 0.148 -> 0.108, 0.112,
-//   0.120, 0.114, 0.137 ms (102 registers: 0.119 at stride 1, 2-19% slower at 2-16);
-// - the course's at stride 16 (later): 0.175 -> 0.155 ms (temporal's last level).
+// each tap row then needs one address per plane, its taps' column offsets immediates.
 template <class Kernel, int Stride>
 struct FixedStride {
     Kernel kernel;
@@ -53,19 +35,9 @@ struct FixedStride {
 
 // A fixed-stride iteration run as pixel pairs a stride apart in a column
 // (Kernel::filterPair<Stride>), for kernels whose LaunchTraits say kPairsRows: two pixels share
-// 20 of their 25 taps, so a pair loads 30 where two threads load 50, and a thread has two
-// independent chains of arithmetic to interleave. Thread row r handles rows top(r) and
-// top(r) + Stride, top(r) = 2 Stride floor(r / Stride) + r mod Stride (each row once); a top row
-// whose partner lies outside the image is filtered alone. Measured on the H100 at 1080p (bench
-// --size 1920x1080 --frames 200, 2-3 alternating runs, medians), iterations at strides 1-16:
-// - the course's, 168 registers: 0.138, 0.147, 0.152, 0.149, 0.169 (modulated) -> 0.101,
-//   0.102, 0.105, 0.103, 0.133 ms; `atrous` 0.920 -> 0.708 ms, `temporal` 1.120 -> 0.902
-//   (128 registers: 0.715 and 0.913; 255: 0.830 and 1.012);
-// - SVGF's, 128 registers: 0.093, 0.097, 0.103, 0.100, 0.095 (modulated) -> 0.082, 0.082,
-//   0.084, 0.083, 0.095 ms; `svgf` 0.925 -> 0.863 ms (0.887 with the depth scales kept per
-//   centre rather than shared by couples, SvgfAtrous::filterPair; with those, 102 registers:
-//   0.912, 85: 0.953, 170: 0.910, and the CPU's polynomial for the normal factor instead of
-//   log2: 0.940).
+// 20 of their 25 taps, so a pair loads 30 where two threads load 50. Thread row r handles rows
+// top(r) and top(r) + Stride, top(r) = 2 Stride floor(r / Stride) + r mod Stride (each row
+// once); a top row whose partner lies outside the image is filtered alone.
 template <class Kernel, int Stride>
 struct PairedRows {
     Kernel kernel;
@@ -93,10 +65,7 @@ struct DefaultLaunch {
 };
 template <class Kernel>
 struct LaunchTraits : DefaultLaunch {};
-// The course's: in pairs at 168 registers (PairedRows, above). Alone (before the pairs), 128 at
-// stride 1 and 170 from stride 2 had been the best (128 against 170 at strides 1-16: 0.152,
-// 0.152, 0.158, 0.155, 0.155 -> 0.143, 0.151, 0.160, 0.158, 0.159 ms; modulated at 16: 0.173 ->
-// 0.186).
+// The course's: in pairs at 168 registers (PairedRows, above).
 template <bool NarrowNormal, bool Modulated>
 struct LaunchTraits<Atrous<NarrowNormal, Modulated>> : DefaultLaunch {
     static constexpr int kMinBlocks = 4;
@@ -104,9 +73,7 @@ struct LaunchTraits<Atrous<NarrowNormal, Modulated>> : DefaultLaunch {
     static constexpr bool kPairsRows = true;
     static constexpr int pairMinBlocks() { return 3; }
 };
-// SVGF's with the guide interleaved: in pairs at 128 registers (PairedRows, above). Alone
-// (before the pairs), 128 at stride 1 and 102 from stride 2 had been the best (102 against 128 at
-// strides 1-16: 0.094, 0.097, 0.100, 0.098, 0.108 -> 0.100, 0.094, 0.100, 0.099, 0.099 ms).
+// SVGF's with the guide interleaved: in pairs at 128 registers (PairedRows, above).
 template <int FixedSigmaNormal, bool Modulated, bool Interleaved>
 struct LaunchTraits<SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved>> : DefaultLaunch {
     static constexpr int kMinBlocks = 5;
@@ -116,11 +83,8 @@ struct LaunchTraits<SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved>> : Defa
     // The planar forms' (the CPU's, compiled here but not run: the CUDA device interleaves).
     static constexpr int fixedStrideMinBlocks() { return 4; }
 };
-// SVGF's one-pass temporal stage at 64 registers: its history gathers wait on memory (Nsight: 10
-// warps stalled on loads per issue at 35 % occupancy), and 16 more warps per SM hide more of it
-// (H100, 1080p: 0.153 -> 0.142 ms, 4K 0.569 -> 0.526; 48 registers: 0.151, 40: 0.161 with
-// spills). The temporal method's (ReprojectAccumulate) kept the default: 0.136 against 0.139 at
-// 64 and 48 registers.
+// SVGF's one-pass temporal stage at 64 registers: its history gathers wait on memory, and more
+// resident warps hide more of it.
 template <bool Interleaved>
 struct LaunchTraits<SvgfTemporal<Interleaved>> : DefaultLaunch {
     static constexpr int kMinBlocks = 8;
@@ -171,8 +135,7 @@ __global__ void __launch_bounds__(kTileThreads) runTileKernel(Kernel kernel) {
 }
 
 // Block shape: 32 x 4, or 64 x 2 for the A-Trous iterations whose taps are 8 or more rows apart
-// (tapRowStride()): a block then fetches half as many distinct rows. Iterations at strides 8 and
-// 16 ran 2-6% faster so (H100, 1080p), those at 1-4 slower.
+// (tapRowStride()): a block then fetches half as many distinct rows.
 template <class Kernel>
 dim3 blockShape(const Kernel& kernel) {
     int x = 32;
@@ -318,10 +281,9 @@ class CudaDevice final : public Device {
         return p;
     }
     void release(void* pointer) noexcept override { cudaFree(pointer); }
-    // Host frames are pageable memory, which the GPU cannot read: the driver would stage them
-    // through its own pinned buffers at about 9 GB/s (12-14 ms for a 1080p frame on the H100
-    // machine). Large copies go through pinned chunks of ours instead, each filled on every
-    // core while the previous one is in flight.
+    // Host frames are pageable memory, which the driver would stage through its own pinned
+    // buffers at about a third of the bus's speed: large copies go through pinned chunks of
+    // ours instead, each filled on every core while the previous one is in flight.
     void copyToDevice(void* dst, const void* src, std::size_t bytes) override {
         if (bytes < kStageChunk / 4) {
             check(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyHostToDevice, stream_),
