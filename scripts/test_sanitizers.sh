@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The sanitizer runs (scripts/test.sh calls it; issue 20): the whole test suite built with the
-# `debug` preset (clang, -O1, AddressSanitizer + UndefinedBehaviorSanitizer, any finding fatal),
+# `debug` preset (clang, -O1, AddressSanitizer + UndefinedBehaviorSanitizer, any finding fatal;
+# every label but soak, so the quality tier too),
 # then each libFuzzer target of the `fuzz` preset for RTD_FUZZ_RUNS inputs (20000) over its seed
 # corpus. Any sanitizer report fails the run.
 set -euo pipefail
