@@ -13,6 +13,7 @@
 
 #include "baseline_jbf.h"
 #include "core/frame_order.h"
+#include "rtdenoise/io.h"
 #include "rtdenoise/rtdenoise.h"
 #include "tuning.h"
 

@@ -492,6 +492,13 @@ TEST(Pipeline, APassCannotTouchWhatItDidNotDeclare) {
               [](const PassContext& c) { c.output(); });
     q.allocate(*device, 8, 4);
     EXPECT_THROW(q.run(*device, frame), Error);
+    // ...and reads a resource as its own element type only.
+    Pipeline t;
+    ResourceId ids = t.declare({.name = "ids", .element = Element::Int32});
+    t.addPass("ids-as-floats", StepKind::Modulate, {ids}, {}, 0,
+              [ids](const PassContext& c) { c.floats(ids); });
+    t.allocate(*device, 8, 4);
+    EXPECT_THROW(t.run(*device, frame), Error);
     // The border covers the widest reach, rounded to whole cache lines.
     Pipeline r;
     r.addPass("wide", StepKind::Modulate, {}, {}, 17, [](const PassContext&) {});

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "render/render_sequence.h"
+#include "rtdenoise/io.h"
 #include "rtdenoise/rtdenoise.h"
 
 namespace rtd::test {

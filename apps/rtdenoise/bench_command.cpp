@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "core/frame_order.h"
 #include "render/render_sequence.h"
+#include "rtdenoise/io.h"
 #include "rtdenoise/rtdenoise.h"
 
 namespace fs = std::filesystem;

@@ -16,6 +16,7 @@
 
 #include "commands.h"
 #include "progress.h"
+#include "rtdenoise/io.h"
 #include "rtdenoise/rtdenoise.h"
 
 namespace fs = std::filesystem;

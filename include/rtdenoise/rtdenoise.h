@@ -1,8 +1,8 @@
-// Umbrella header of the rtdenoise library.
+// Umbrella header of the rtdenoise library (the denoiser). Files (EXR, PNG, sequences, video) are
+// the rtdenoise_io library's: rtdenoise/io.h.
 #pragma once
 
 #include "rtdenoise/denoiser.h"
 #include "rtdenoise/error.h"
 #include "rtdenoise/image.h"
-#include "rtdenoise/io.h"
 #include "rtdenoise/settings.h"

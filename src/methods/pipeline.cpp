@@ -42,9 +42,13 @@ void PassContext::require(ResourceId r, bool write) const {
 void* PassContext::memory(ResourceId r, Element element) const {
     const auto& access = pipeline_.passes_[std::size_t(pass_)].access;
     std::size_t k = 2 * std::size_t(r.index) + (r.last ? 1 : 0);
-    if (r.index < 0 || k >= access.size() || access[k] == 0 ||
-        pipeline_.resources_[std::size_t(r.index)].element != element)
+    if (r.index < 0 || k >= access.size() || access[k] == 0)
         require(r, false);  // throws, naming the pass and the resource
+    const ResourceDecl& d = pipeline_.resources_[std::size_t(r.index)];
+    if (d.element != element || d.lifetime == Lifetime::External)
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("pipeline: pass '{}' reads '{}' as another element type",
+                                pipeline_.passInfos_[std::size_t(pass_)].name, d.name));
     return pipeline_.at(r);
 }
 
