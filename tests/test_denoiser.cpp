@@ -583,3 +583,33 @@ TEST(FrameViewApi, BadViewsAreRejected) {
 
 }  // namespace
 }  // namespace rtd
+
+namespace rtd {
+namespace {
+
+// A frame's result does not depend on which of the two history copies the frame lands in: after
+// reset() (history forgotten) the same frames give the same results, bit for bit, whether the
+// pipeline starts on its first copy or its second. Before the methods were declarations, SVGF
+// with its feedback iteration last modulated the first copy on every frame (odd frames repeated
+// the previous frame's result).
+TEST(Denoiser, ResultsDoNotDependOnTheHistoryCopyInUse) {
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 40, 30, 3);
+    DenoiserSettings feedbackLast = settingsFor(Method::Svgf);
+    feedbackLast.svgf.feedbackIteration = feedbackLast.svgf.iterations - 1;
+    std::vector<DenoiserSettings> cases = {settingsFor(Method::Temporal), settingsFor(Method::Svgf),
+                                           feedbackLast};
+    for (const DenoiserSettings& s : cases) {
+        Denoiser even(s), odd(s);
+        odd.processFrame(frames.back());
+        odd.reset();
+        for (std::size_t i = 0; i < frames.size(); ++i)
+            EXPECT_EQ(test::maxRelativeDifference(even.processFrame(frames[i]),
+                                                  odd.processFrame(frames[i])),
+                      0.0)
+                << toString(s.method) << " feedback " << s.svgf.feedbackIteration << ", frame "
+                << i;
+    }
+}
+
+}  // namespace
+}  // namespace rtd

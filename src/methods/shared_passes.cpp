@@ -91,18 +91,32 @@ FrameImages declareIngest(Pipeline& p, const DenoiserSettings& settings) {
     if (temporal || settings.outlier.enabled) f.windowSums = p.declare(floatImage("windowSums", 7));
     const float epsilon = settings.albedo.epsilon;
     const int separateObjects = settings.edges.separateObjects ? 1 : 0;
-    p.addPass(
-        "ingest", StepKind::Ingest, {p.frame()},
-        {f.noisy, f.albedo, f.guide, f.position, f.objectId, f.filterKeys, f.inputFlags}, 0,
-        [f, epsilon, separateObjects](const PassContext& c) {
-            const FrameBinding& in = c.frame();
-            GBufferView g = gbuffer(c, f);
-            c.device().run(IngestStep{
-                {c.layout(), in.beauty, in.normal, in.position, in.depth, in.objectId,
-                 in.objectCount, in.albedo, epsilon, c.planes(f.noisy), c.planes(f.albedo),
-                 g.normal, c.planes(f.position), const_cast<float*>(g.depth), c.ints(f.objectId),
-                 c.bytes(f.inputFlags), g.normalDepth, c.ints(f.filterKeys), separateObjects}});
-        });
+    p.addPass("ingest", StepKind::Ingest, {p.frame()},
+              {f.noisy, f.albedo, f.guide, f.position, f.objectId, f.filterKeys, f.inputFlags}, 0,
+              [f, epsilon, separateObjects](const PassContext& c) {
+                  const FrameBinding& in = c.frame();
+                  float* guide = c.floats(f.guide);  // normal planes + depth, or interleaved
+                  const int planeSize = c.layout().planeSize;
+                  c.device().run(IngestStep{{c.layout(),
+                                             in.beauty,
+                                             in.normal,
+                                             in.position,
+                                             in.depth,
+                                             in.objectId,
+                                             in.objectCount,
+                                             in.albedo,
+                                             epsilon,
+                                             c.planes(f.noisy),
+                                             c.planes(f.albedo),
+                                             {guide, planeSize},
+                                             c.planes(f.position),
+                                             guide + 3 * std::size_t(planeSize),
+                                             c.ints(f.objectId),
+                                             c.bytes(f.inputFlags),
+                                             {guide},
+                                             c.ints(f.filterKeys),
+                                             separateObjects}});
+              });
     return f;
 }
 
