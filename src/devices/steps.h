@@ -138,6 +138,45 @@ SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved> svgfAtrousForm(
     return {k.g, k.derivatives, k.in, k.out, k.stride, k.terms, k.albedo, k.rgbOut};
 }
 
+// The forms both devices pick alike, launched by `launch(kernel)` (the device's own launcher).
+// The narrow-normal forms where sigma_normal makes opposite normals' weight vanish: no square
+// root per tap. tiles: the firefly removal as one tile pass where its window fits the tile.
+template <class Launch>
+void runJbfStep(const JbfStep& s, Launch&& launch) {
+    const JbfKernel& j = s.jbf;
+    if (oppositeNormalsVanish(j.edges))
+        launch(JbfNarrowNormalKernel{j.g, j.in, j.out, j.radius, j.coordScale, j.edges});
+    else
+        launch(j);
+}
+template <class Launch>
+void runAtrousLevelStep(const AtrousLevelStep& s, Launch&& launch) {
+    const bool narrow = oppositeNormalsVanish(s.level.edges);
+    if (s.modulated)
+        narrow ? launch(atrousForm<true, true>(s.level)) : launch(s.level);
+    else
+        narrow ? launch(atrousForm<true, false>(s.level))
+               : launch(atrousForm<false, false>(s.level));
+}
+template <class Launch>
+void runDespeckleStep(const DespeckleStep& s, bool tiles, Launch&& launch) {
+    if (tiles && s.radius <= kNarrowWindow) {  // the window statistics kept in the tile
+        if (s.clampSums.data)
+            launch(OutlierClampTileKernel{s.g, s.in, s.out, s.clampSums, s.radius, s.k});
+        else
+            launch(OutlierTileKernel{s.g, s.in, s.out, {}, s.radius, s.k});
+        return;
+    }
+    if (s.radius <= kNarrowWindow) {
+        launch(LuminanceRowSumsKernel{s.g, s.in, s.rowSums, s.radius});
+        launch(OutlierKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
+    } else {
+        launch(LuminanceRowSumsWideKernel{s.g, s.in, s.rowSums, s.radius});
+        launch(OutlierWideKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
+    }
+    if (s.clampSums.data) launch(ColorRowSumsKernel{s.g, s.out, s.clampSums, kSvgfWindowRadius});
+}
+
 // Calls run.template operator()<MaxRadius>() with the window instantiation (window_sums.h) that
 // covers `radius`: the 7x7 one where it suffices, else the widest.
 template <class Run>

@@ -37,6 +37,11 @@ FrameImages declareIngest(Pipeline& pipeline, const DenoiserSettings& settings);
 std::vector<ResourceId> gbufferReads(const FrameImages& images);
 std::vector<ResourceId> with(std::vector<ResourceId> ids, std::initializer_list<ResourceId> more);
 GBufferView gbuffer(const PassContext& context, const FrameImages& images);
+// What a reprojection reads besides its history: this frame's G-buffer, the last frame's IDs and
+// guide, the matrices and the frame (object count, whether there is history).
+std::vector<ResourceId> reprojectionReads(const Pipeline& pipeline, const FrameImages& images);
+// Per pixel, why history was used or not (ReprojectionCode): the Reprojection debug view.
+ResourceId declareValidity(Pipeline& pipeline);
 // The last frame's IDs and guide, for the history test.
 PreviousGeometry previousGeometry(const PassContext& context, const FrameImages& images);
 HistoryTest historyTest(const HistorySettings& settings);

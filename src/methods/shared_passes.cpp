@@ -70,6 +70,20 @@ PreviousGeometry previousGeometry(const PassContext& c, const FrameImages& f) {
             {guide}};
 }
 
+std::vector<ResourceId> reprojectionReads(const Pipeline& p, const FrameImages& f) {
+    return with(gbufferReads(f),
+                {previous(f.guide), previous(f.objectId), p.matrices(), p.frame()});
+}
+
+ResourceId declareValidity(Pipeline& p) {
+    return p.declare({.name = "validity",
+                      .element = Element::Byte,
+                      .fillByte = kReprojectionNoHistory,
+                      .hasDebugView = true,
+                      .debugView = DebugView::Reprojection,
+                      .debugShow = DebugShow::ReprojectionCodes});
+}
+
 HistoryTest historyTest(const HistorySettings& s) {
     return {s.geometryTests ? 1 : 0, s.depthTolerance, s.normalTolerance};
 }

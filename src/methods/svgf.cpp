@@ -42,12 +42,7 @@ FrameImages declareSvgf(Pipeline& p, const DenoiserSettings& settings) {
                                    .debugDivisor = float(sv.maxHistory)});
     // The feedback iteration's output: next frame's colour history.
     ResourceId feedback = p.declare(floatImage("feedback", 4, Lifetime::History));
-    ResourceId validity = p.declare({.name = "validity",
-                                     .element = Element::Byte,
-                                     .fillByte = kReprojectionNoHistory,
-                                     .hasDebugView = true,
-                                     .debugView = DebugView::Reprojection,
-                                     .debugShow = DebugShow::ReprojectionCodes});
+    ResourceId validity = declareValidity(p);
     const SvgfTerms terms{sv.sigmaDepth, sv.sigmaNormal, sv.sigmaLuminance};
 
     // Derivatives read 1 pixel away; the reprojection's 3x3 taps reach 2 past the screen.
@@ -60,9 +55,8 @@ FrameImages declareSvgf(Pipeline& p, const DenoiserSettings& settings) {
     std::vector<ResourceId> temporalOut = {illumination, moments, length, variance, validity};
     if (clampRowsHere) temporalOut.push_back(f.windowSums);
     p.addPass("svgf-temporal", StepKind::SvgfTemporalStage,
-              with(gbufferReads(f), {previous(f.guide), previous(f.objectId), derivatives,
-                                     previous(feedback), previous(moments), previous(length),
-                                     p.matrices(), p.frame(), in, f.windowSums}),
+              with(reprojectionReads(p, f), {derivatives, previous(feedback), previous(moments),
+                                             previous(length), in, f.windowSums}),
               temporalOut, std::max(2, kSvgfWindowRadius), [=](const PassContext& c) {
                   GBufferView g = gbuffer(c, f);
                   const FrameBinding& frame = c.frame();

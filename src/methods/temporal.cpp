@@ -21,20 +21,14 @@ FrameImages declareTemporal(Pipeline& p, const DenoiserSettings& settings) {
     declareSpatialFilter(p, settings, f, t.spatialFilter, in, filtered, scratch, false);
 
     ResourceId history = p.declare(floatImage("history", 3, Lifetime::History));
-    ResourceId validity = p.declare({.name = "validity",
-                                     .element = Element::Byte,
-                                     .fillByte = kReprojectionNoHistory,
-                                     .hasDebugView = true,
-                                     .debugView = DebugView::Reprojection,
-                                     .debugShow = DebugShow::ReprojectionCodes});
+    ResourceId validity = declareValidity(p);
     const HistoryTest test = historyTest(settings.history);
     const float alpha = t.alpha, k = t.clampK;
     const int radius = t.clampRadius;
     // The slopes read 1 pixel away, the reprojection's taps reach 2 past the screen.
     const int reach = std::max(2, radius <= kNarrowWindow ? kNarrowWindow : kWideWindow);
     p.addPass("temporal", StepKind::TemporalStage,
-              with(gbufferReads(f), {previous(f.guide), previous(f.objectId), previous(history),
-                                     p.matrices(), p.frame(), filtered, f.albedo}),
+              with(reprojectionReads(p, f), {previous(history), filtered, f.albedo}),
               {f.windowSums, history, validity, p.output()}, reach, [=](const PassContext& c) {
                   GBufferView g = gbuffer(c, f);
                   const FrameBinding& frame = c.frame();

@@ -68,34 +68,13 @@ class CpuDevice final : public Device {
 
     void run(const IngestStep& s) override { launch(s.ingest); }
     void run(const DespeckleStep& s) override {
-        if (tiles_ && s.radius <= kNarrowWindow) {  // the window statistics kept in the tile
-            if (s.clampSums.data)
-                launch(OutlierClampTileKernel{s.g, s.in, s.out, s.clampSums, s.radius, s.k});
-            else
-                launch(OutlierTileKernel{s.g, s.in, s.out, {}, s.radius, s.k});
-            return;
-        }
-        forWindow(s.radius, [&]<int R>() {
-            launch(LuminanceRowSums<R>{s.g, s.in, s.rowSums, s.radius});
-            launch(Outlier<R>{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
-        });
-        if (s.clampSums.data)
-            launch(ColorRowSumsKernel{s.g, s.out, s.clampSums, kSvgfWindowRadius});
+        runDespeckleStep(s, tiles_, [this](const auto& k) { launch(k); });
     }
     void run(const JbfStep& s) override {
-        const JbfKernel& j = s.jbf;
-        if (oppositeNormalsVanish(j.edges))  // no square root per tap
-            launch(JbfNarrowNormalKernel{j.g, j.in, j.out, j.radius, j.coordScale, j.edges});
-        else
-            launch(j);
+        runJbfStep(s, [this](const auto& k) { launch(k); });
     }
     void run(const AtrousLevelStep& s) override {
-        bool narrow = oppositeNormalsVanish(s.level.edges);  // no square root per tap
-        if (s.modulated)
-            narrow ? launch(atrousForm<true, true>(s.level)) : launch(s.level);
-        else
-            narrow ? launch(atrousForm<true, false>(s.level))
-                   : launch(atrousForm<false, false>(s.level));
+        runAtrousLevelStep(s, [this](const auto& k) { launch(k); });
     }
     // Split: each pass vectorises (the reprojection's gathers would stop the accumulation's).
     void run(const TemporalStageStep& s) override {

@@ -202,37 +202,13 @@ class CudaDevice final : public Device {
         interleaved_ ? launch(ingestForm<true>(s.ingest)) : launch(s.ingest);
     }
     void run(const DespeckleStep& s) override {
-        if (tiles_ && s.radius <= kNarrowWindow) {
-            if (s.clampSums.data)
-                launch(OutlierClampTileKernel{s.g, s.in, s.out, s.clampSums, s.radius, s.k});
-            else
-                launch(OutlierTileKernel{s.g, s.in, s.out, {}, s.radius, s.k});
-            return;
-        }
-        if (s.radius <= kNarrowWindow) {
-            launch(LuminanceRowSumsKernel{s.g, s.in, s.rowSums, s.radius});
-            launch(OutlierKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
-        } else {
-            launch(LuminanceRowSumsWideKernel{s.g, s.in, s.rowSums, s.radius});
-            launch(OutlierWideKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
-        }
-        if (s.clampSums.data)
-            launch(ColorRowSumsKernel{s.g, s.out, s.clampSums, kSvgfWindowRadius});
+        runDespeckleStep(s, tiles_, [this](const auto& k) { launch(k); });
     }
     void run(const JbfStep& s) override {
-        const JbfKernel& j = s.jbf;
-        if (oppositeNormalsVanish(j.edges))
-            launch(JbfNarrowNormalKernel{j.g, j.in, j.out, j.radius, j.coordScale, j.edges});
-        else
-            launch(j);
+        runJbfStep(s, [this](const auto& k) { launch(k); });
     }
     void run(const AtrousLevelStep& s) override {
-        bool narrow = oppositeNormalsVanish(s.level.edges);
-        if (s.modulated)
-            narrow ? launch(atrousForm<true, true>(s.level)) : launch(s.level);
-        else
-            narrow ? launch(atrousForm<true, false>(s.level))
-                   : launch(atrousForm<false, false>(s.level));
+        runAtrousLevelStep(s, [this](const auto& k) { launch(k); });
     }
     // Fused: the history in registers, the slopes computed where needed (ReprojectAccumulate).
     void run(const TemporalStageStep& s) override {
