@@ -14,7 +14,7 @@ namespace rtd {
 // finite at any finite input (1e16 squared, times the 31x31 widest window, is under 1e36).
 constexpr float kMaxRadiance = 1e16f;
 
-// A float image with 1 or 3 interleaved channels, rows top to bottom.
+// A float image with 1 to 4 interleaved channels, rows top to bottom.
 struct Image {
     int width = 0;
     int height = 0;
@@ -45,15 +45,31 @@ struct Matrix4 {
     }
 };
 
+// What a depth buffer holds. The history test compares depths across frames: both kinds work;
+// with matrices (no motion vectors) a ray distance is turned into view depth from the position.
+enum class DepthKind {
+    ViewZ,        // distance from the camera plane (w after projection)
+    RayDistance,  // distance from the camera along the pixel's ray (Cycles' Depth pass)
+};
+
 // One frame of a path-traced sequence with its G-buffer (layout: shared/data/README.md).
+// Back-projection into the previous frame comes from the per-object matrices or, where the frame
+// has them, from its motion vectors (then no matrices are needed).
 struct Frame {
     Image beauty;    // 3 channels, noisy linear radiance
     Image normal;    // 3 channels, world-space unit normal, (0,0,0) on background
     Image position;  // 3 channels, world-space hit position
-    Image depth;     // 1 channel, camera-space depth (w after projection)
+    Image depth;     // 1 channel, see depthKind
+    DepthKind depthKind = DepthKind::ViewZ;
     std::vector<std::int32_t> objectId;  // width * height, 0..K-1, -1 on background
     std::optional<Image> albedo;         // 3 channels, optional
-    std::vector<Matrix4> objectToWorld;  // K matrices, object k's local-to-world
+    // 2 channels, pixels (x right, y down): a pixel's point was at (x, y) + motion in the
+    // previous frame (NVIDIA NRD's convention: previous = current + motion). A third channel,
+    // where given, is the point's previous depth minus its current one (same units as depth).
+    std::optional<Image> motion;
+    std::vector<Matrix4> objectToWorld;  // K matrices, object k's local-to-world (none: motion)
+    // With motion vectors and no matrices: IDs are -1..objectCount-1 (0: objectToWorld.size()).
+    int objectCount = 0;
     Matrix4 worldToCamera = Matrix4::identity();
     Matrix4 worldToScreen = Matrix4::identity();
 
