@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
+#include <optional>
 
 #include "devices/device.h"
 #include "methods/method.h"
@@ -59,6 +61,11 @@ void checkFrame(const Frame& f) {
     checkImage(f.position, w, h, 3, "position");
     checkImage(f.depth, w, h, 1, "depth");
     if (f.albedo) checkImage(*f.albedo, w, h, 3, "albedo");
+    if (f.motion && (f.motion->channels < 2 || f.motion->channels > 4))
+        throw Error(
+            ErrorCode::InvalidInput,
+            fmt::format("frame: motion has {} channels, expected 2 to 4", f.motion->channels));
+    if (f.motion) checkImage(*f.motion, w, h, f.motion->channels, "motion");
     if (f.objectId.size() != std::size_t(w) * h)
         throw Error(
             ErrorCode::InvalidInput,
@@ -66,13 +73,66 @@ void checkFrame(const Frame& f) {
     // Object IDs are checked on the device, by the ingest (see throwBadObjectId).
 }
 
+std::size_t valueBytes(DataType type) {
+    return type == DataType::Float16 ? 2 : 4;
+}
+
+// One of a frame's images as the caller laid it out, checked, its defaults filled in.
+struct InputLayout {
+    const char* name = "";
+    ImageView view;
+    std::size_t spanBytes = 0;  // from the first value to the last one's end
+    bool packed = false;        // packed float (IDs: int32) with the image's own channel count
+};
+
+InputLayout inputLayout(const char* name, const ImageView& v, int width, int height,
+                        int ownChannels, int maxChannels, bool ids) {
+    InputLayout l{name, v};
+    ImageView& view = l.view;
+    if (view.channels == 0) view.channels = ownChannels;
+    const bool typeOk = view.type == DataType::Float32 || view.type == DataType::Float16 ||
+                        (ids && view.type == DataType::Int32);
+    if (!typeOk)
+        throw Error(ErrorCode::InvalidInput,
+                    fmt::format("frame: {}: int32 values are for object IDs only", name));
+    if (view.channels < ownChannels || view.channels > maxChannels)
+        throw Error(ErrorCode::InvalidInput,
+                    fmt::format("frame: {} has {} channels, expected {} to {}", name, view.channels,
+                                ownChannels, maxChannels));
+    const std::size_t pixelBytes = std::size_t(view.channels) * valueBytes(view.type);
+    if (view.pixelStride == 0) view.pixelStride = pixelBytes;
+    if (view.rowStride == 0) view.rowStride = std::size_t(width) * view.pixelStride;
+    if (view.pixelStride < pixelBytes ||
+        view.rowStride < (width - 1) * view.pixelStride + pixelBytes)
+        throw Error(ErrorCode::InvalidInput,
+                    fmt::format("frame: {}: strides of {} bytes per pixel and {} per row are too "
+                                "small for {} values of {} bytes in rows of {} pixels",
+                                name, view.pixelStride, view.rowStride, view.channels,
+                                valueBytes(view.type), width));
+    l.spanBytes = (height - 1) * view.rowStride + (width - 1) * view.pixelStride + pixelBytes;
+    const std::size_t ownBytes = std::size_t(ownChannels) * 4;
+    l.packed = view.type == (ids ? DataType::Int32 : DataType::Float32) &&
+               view.channels == ownChannels && view.pixelStride == ownBytes &&
+               view.rowStride == std::size_t(width) * ownBytes &&
+               reinterpret_cast<std::uintptr_t>(view.data) % 4 == 0;
+    return l;
+}
+
+InputSpan spanOf(const ImageView& v, const void* data) {
+    return {static_cast<const unsigned char*>(data), int(v.type), v.channels,
+            std::int64_t(v.pixelStride), std::int64_t(v.rowStride)};
+}
+
 }  // namespace
 
-// A frame input as the device reads it: the caller's buffer itself where the device shares host
-// memory, else a copy in `staging`.
+// A frame input as the ingest reads it (packed floats, or int32 IDs, in device memory): the
+// caller's buffer itself where it is packed and the device reads its memory, else a copy of its
+// bytes in `staging` and/or a packed conversion in `converted`. Both grow only.
 struct InputBuffer {
-    DeviceBuffer<float> staging;  // only for devices that cannot read host memory
+    DeviceBuffer<unsigned char> staging;  // only for devices that cannot read host memory
+    DeviceBuffer<float> converted;        // only for layouts other than packed float
     const void* device = nullptr;
+    InputSpan span;  // the caller's layout, as the device reads it (staged or not)
 };
 
 struct Denoiser::Impl {
@@ -83,14 +143,15 @@ struct Denoiser::Impl {
     FrameStats stats;
     bool hasHistory = false;
 
-    DeviceBuffer<float> stageOutput;
+    DeviceBuffer<float> stageOutput;  // the result, where it is not written in place
+    std::vector<float> hostOutput;    // the result on the host, for a strided or half host output
     DeviceBuffer<ObjectReprojection> objects;
     std::vector<ObjectReprojection> hostObjects;
     // The previous frame's matrices (for back-projection).
     std::vector<Matrix4> previousObjectToWorld;
     Matrix4 previousWorldToScreen;
     // Per frame: the caller's buffers as the device sees them.
-    InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo;
+    InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo, inMotion;
 
     Impl(const DenoiserSettings& s, const DeviceTuning& tuning) : settings(s) {
         validate(settings);
@@ -104,24 +165,91 @@ struct Denoiser::Impl {
 
     void allocate(int w, int h) {
         pipeline.allocate(*device, w, h);
-        if (!device->sharesHostMemory()) {
-            std::size_t n = pixels();
-            for (auto* in : {&inBeauty, &inNormal, &inPosition, &inAlbedo})
-                in->staging = DeviceBuffer<float>(*device, 3 * n);
-            inDepth.staging = DeviceBuffer<float>(*device, n);
-            inId.staging = DeviceBuffer<float>(*device, n);  // holds int32 IDs: same size
-            stageOutput = DeviceBuffer<float>(*device, 3 * n);
-        }
+        for (auto* in : {&inBeauty, &inNormal, &inPosition, &inDepth, &inId, &inAlbedo, &inMotion})
+            *in = InputBuffer{};
+        stageOutput = DeviceBuffer<float>(*device, 3 * pixels());
         hasHistory = false;
     }
 
+    // Where the device reads `l` from: its bytes (staged where the device cannot read them),
+    // then, unless packed (or keepLayout: the kernel reads the caller's layout itself), packed
+    // floats or IDs. copy: packed floats in any case (the view depth is written over them).
+    void bindInput(InputBuffer& in, const InputLayout& l, MemorySpace space, int ownChannels,
+                   bool ids, bool keepLayout = false, bool copy = false) {
+        const void* bytes = l.view.data;
+        if (!device->sharesHostMemory() && space == MemorySpace::Host) {
+            if (in.staging.size() < l.spanBytes)
+                in.staging = DeviceBuffer<unsigned char>(*device, l.spanBytes);
+            device->copyToDevice(in.staging.data(), bytes, l.spanBytes);
+            bytes = in.staging.data();
+        }
+        in.span = spanOf(l.view, bytes);
+        if (keepLayout || (l.packed && !copy)) {
+            in.device = bytes;
+            return;
+        }
+        if (in.converted.size() < ownChannels * pixels())
+            in.converted = DeviceBuffer<float>(*device, ownChannels * pixels());
+        ConvertStep convert;
+        convert.input = {in.span, layout().width, ownChannels, in.converted.data(), ids ? 1 : 0};
+        device->run(convert);
+        in.device = in.converted.data();
+    }
+
+    void bindInputs(const FrameView& f) {
+        const int w = f.width, h = f.height;
+        const bool useAlbedo = f.albedo && settings.albedo.demodulate;
+        const bool useMotion = f.motion && pipeline.keepsHistory();
+        InputLayout beauty = inputLayout("beauty", f.beauty, w, h, 3, 4, false);
+        InputLayout normal = inputLayout("normal", f.normal, w, h, 3, 4, false);
+        InputLayout position = inputLayout("position", f.position, w, h, 3, 4, false);
+        InputLayout depth = inputLayout("depth", f.depth, w, h, 1, 4, false);
+        InputLayout ids = inputLayout("objectId", f.objectId, w, h, 1, 4, true);
+        // All checked before any is bound.
+        std::optional<InputLayout> albedo, motion;
+        if (useAlbedo) albedo = inputLayout("albedo", f.albedo, w, h, 3, 4, false);
+        if (useMotion) motion = inputLayout("motion", f.motion, w, h, 2, 4, false);
+        // With matrices, back-projection compares view depths: a ray distance is replaced.
+        const bool viewDepth =
+            f.depthKind == DepthKind::RayDistance && !useMotion && pipeline.keepsHistory();
+        bindInput(inBeauty, beauty, f.space, 3, false);
+        bindInput(inNormal, normal, f.space, 3, false);
+        bindInput(inPosition, position, f.space, 3, false);
+        bindInput(inDepth, depth, f.space, 1, false, false, viewDepth);
+        bindInput(inId, ids, f.space, 1, true);
+        inAlbedo.device = nullptr;
+        if (albedo) bindInput(inAlbedo, *albedo, f.space, 3, false);
+        inMotion.span = {};
+        if (motion) bindInput(inMotion, *motion, f.space, 2, false, true);
+        if (viewDepth) {
+            ConvertStep convert;
+            convert.kind = ConvertStep::Kind::ViewDepth;
+            const auto& row = f.worldToScreen.m[3];
+            convert.viewDepth = {static_cast<const float*>(inPosition.device),
+                                 w,
+                                 {row[0], row[1], row[2], row[3]},
+                                 static_cast<float*>(const_cast<void*>(inDepth.device))};
+            device->run(convert);
+        }
+        device->synchronize();
+    }
+
     // One matrix per object: current world -> object -> previous world (-> previous screen).
+    // With motion vectors: the identity for every object (the previous position is the
+    // pixel's own; normals are compared unrotated).
     void uploadObjectMatrices(const FrameView& f) {
         std::size_t count = std::size_t(f.objectCount);
+        const bool fromMotion = bool(f.motion);
         hostObjects.resize(count);
         for (std::size_t k = 0; k < count; ++k) {
             ObjectReprojection& o = hostObjects[k];
             o = ObjectReprojection{};
+            if (fromMotion) {
+                o.currentWorldToPreviousScreen = toMat4(Matrix4::identity());
+                o.currentWorldToPreviousWorld = o.currentWorldToPreviousScreen;
+                o.valid = hasHistory ? 1 : 0;
+                continue;
+            }
             Mat4 inverseModel;
             if (!hasHistory || k >= previousObjectToWorld.size() ||
                 !invert(toMat4(f.objectToWorld[k]), inverseModel))
@@ -139,45 +267,15 @@ struct Denoiser::Impl {
                                  count * sizeof(ObjectReprojection));
     }
 
-    void bindInputs(const FrameView& f) {
-        const bool frameHasAlbedo = f.albedo != nullptr && settings.albedo.demodulate;
-        struct Source {
-            InputBuffer* in;
-            const void* host;
-            std::size_t bytes;
-        };
-        std::size_t n = pixels();
-        Source sources[] = {
-            {&inBeauty, f.beauty, 3 * n * sizeof(float)},
-            {&inNormal, f.normal, 3 * n * sizeof(float)},
-            {&inPosition, f.position, 3 * n * sizeof(float)},
-            {&inDepth, f.depth, n * sizeof(float)},
-            {&inId, f.objectId, n * sizeof(std::int32_t)},
-            {&inAlbedo, frameHasAlbedo ? f.albedo : nullptr,
-             frameHasAlbedo ? 3 * n * sizeof(float) : 0},
-        };
-        // Device memory, and host memory a CPU device reads directly, need no copy.
-        bool direct = device->sharesHostMemory() || f.space == MemorySpace::Device;
-        for (Source& s : sources) {
-            if (direct || s.host == nullptr) {
-                s.in->device = s.host;
-            } else {
-                device->copyToDevice(s.in->staging.data(), s.host, s.bytes);
-                s.in->device = s.in->staging.data();
-            }
-        }
-        device->synchronize();
-    }
-
     void process(const Frame& f, Image& output) {
         checkFrame(f);
         if (output.width != f.width() || output.height != f.height() || output.channels != 3)
             output = Image(f.width(), f.height(), 3);
-        process(viewOf(f), output.pixels.data());
+        process(viewOf(f), OutputView{output.pixels.data()});
     }
 
-    void process(const FrameView& f, float* outputRgb) {
-        checkView(f);
+    void process(const FrameView& f, const OutputView& out) {
+        checkView(f, out);
         if (f.width != layout().width || f.height != layout().height) allocate(f.width, f.height);
 
         auto start = Clock::now();
@@ -186,18 +284,27 @@ struct Denoiser::Impl {
         if (temporal) uploadObjectMatrices(f);
         stats.uploadMilliseconds = millisecondsSince(start);
 
-        bool direct = device->sharesHostMemory() || f.space == MemorySpace::Device;
+        const bool direct = device->sharesHostMemory() || f.space == MemorySpace::Device;
+        const std::size_t outPixelBytes = out.channels * valueBytes(out.type);
+        const std::size_t outPixelStride = out.pixelStride ? out.pixelStride : outPixelBytes;
+        const std::size_t outRowStride =
+            out.rowStride ? out.rowStride : std::size_t(f.width) * outPixelStride;
+        const bool packedRgb = out.type == DataType::Float32 && out.channels == 3 &&
+                               outPixelStride == 12 && outRowStride == std::size_t(f.width) * 12 &&
+                               reinterpret_cast<std::uintptr_t>(out.data) % 4 == 0;
         auto floats = [](const InputBuffer& b) { return static_cast<const float*>(b.device); };
-        FrameBinding frame{floats(inBeauty),
-                           floats(inNormal),
-                           floats(inPosition),
-                           floats(inDepth),
-                           static_cast<const std::int32_t*>(inId.device),
-                           floats(inAlbedo),
-                           f.objectCount,
-                           objects.data(),
-                           hasHistory ? 1 : 0,
-                           direct ? outputRgb : stageOutput.data()};
+        FrameBinding frame{
+            floats(inBeauty),
+            floats(inNormal),
+            floats(inPosition),
+            floats(inDepth),
+            static_cast<const std::int32_t*>(inId.device),
+            floats(inAlbedo),
+            inMotion.span,
+            f.objectCount,
+            objects.data(),
+            hasHistory ? 1 : 0,
+            direct && packedRgb ? static_cast<float*>(out.data) : stageOutput.data()};
         // Each pass's time from device timestamps: one wait for the whole frame, not one per
         // pass (on a GPU a wait costs about as much as a small kernel).
         pipeline.run(*device, frame);
@@ -216,25 +323,69 @@ struct Denoiser::Impl {
         if (flags.badObjectIds > 0) throwBadObjectId(f);
 
         start = Clock::now();
-        if (!direct)
-            device->copyToHost(outputRgb, stageOutput.data(), 3 * pixels() * sizeof(float));
+        WriteOutputKernel write{stageOutput.data(),
+                                f.width,
+                                static_cast<unsigned char*>(out.data),
+                                out.type == DataType::Float16 ? kSpanFloat16 : kSpanFloat32,
+                                out.channels,
+                                std::int64_t(outPixelStride),
+                                std::int64_t(outRowStride)};
+        if (direct && !packedRgb) {
+            ConvertStep convert;
+            convert.kind = ConvertStep::Kind::Output;
+            convert.output = write;
+            device->run(convert);
+        } else if (!direct && packedRgb) {
+            device->copyToHost(out.data, stageOutput.data(), 3 * pixels() * sizeof(float));
+        } else if (!direct) {
+            // Into host memory in another layout: converted here, after one packed download.
+            hostOutput.resize(3 * pixels());
+            device->copyToHost(hostOutput.data(), stageOutput.data(), 3 * pixels() * sizeof(float));
+            device->synchronize();
+            write.rgb = hostOutput.data();
+            for (int y = 0; y < f.height; ++y)
+                for (int x = 0; x < f.width; ++x) write(x, y);
+        }
         device->synchronize();
         stats.downloadMilliseconds = millisecondsSince(start);
 
         // This frame's geometry and output are the next frame's history.
-        previousObjectToWorld.assign(f.objectToWorld, f.objectToWorld + f.objectCount);
+        if (f.motion)
+            previousObjectToWorld.clear();
+        else
+            previousObjectToWorld.assign(f.objectToWorld, f.objectToWorld + f.objectCount);
         previousWorldToScreen = f.worldToScreen;
         hasHistory = temporal;
         pipeline.endFrame();
     }
 
-    void checkView(const FrameView& f) const {
+    void checkView(const FrameView& f, const OutputView& out) const {
         if (f.width <= 0 || f.height <= 0)
             throw Error(ErrorCode::InvalidInput,
                         fmt::format("frame: size {}x{} is empty", f.width, f.height));
-        if (!f.beauty || !f.normal || !f.position || !f.depth || !f.objectId || f.objectCount < 0 ||
-            (f.objectCount > 0 && !f.objectToWorld))
-            throw Error(ErrorCode::InvalidInput, "frame: a required buffer is missing");
+        const char* missing = !f.beauty     ? "beauty"
+                              : !f.normal   ? "normal"
+                              : !f.position ? "position"
+                              : !f.depth    ? "depth"
+                              : !f.objectId ? "objectId"
+                                            : nullptr;
+        if (missing)
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("frame: the {} buffer is missing", missing));
+        if (f.objectCount < 0 || (f.objectCount > 0 && !f.motion && !f.objectToWorld))
+            throw Error(ErrorCode::InvalidInput,
+                        "frame: objectToWorld is missing (or give motion vectors)");
+        if (!out.data) throw Error(ErrorCode::InvalidInput, "frame: the output buffer is missing");
+        const std::size_t outPixelBytes = out.channels * valueBytes(out.type);
+        if ((out.type != DataType::Float32 && out.type != DataType::Float16) ||
+            (out.channels != 3 && out.channels != 4) ||
+            (out.pixelStride != 0 && out.pixelStride < outPixelBytes) ||
+            (out.rowStride != 0 &&
+             out.rowStride < (f.width - 1) * (out.pixelStride ? out.pixelStride : outPixelBytes) +
+                                 outPixelBytes))
+            throw Error(ErrorCode::InvalidInput,
+                        "frame: the output must be float or half, 3 or 4 channels, with strides "
+                        "that hold them");
         if (f.space == MemorySpace::Device && device->sharesHostMemory())
             throw Error(ErrorCode::InvalidArgument,
                         "frame: device memory needs a Denoiser on a GPU device (" + device->name() +
@@ -270,7 +421,11 @@ void Denoiser::processFrame(const Frame& frame, Image& output) {
 }
 
 void Denoiser::processFrame(const FrameView& frame, float* outputRgb) {
-    impl_->process(frame, outputRgb);
+    impl_->process(frame, OutputView{outputRgb});
+}
+
+void Denoiser::processFrame(const FrameView& frame, const OutputView& output) {
+    impl_->process(frame, output);
 }
 
 void Denoiser::reset() {

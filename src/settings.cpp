@@ -40,6 +40,8 @@ void validate(const DenoiserSettings& s) {
             "clamp radius must be in [1, 15]");
     require(positive(s.history.depthTolerance), "depth tolerance must be > 0");
     require(positive(s.history.normalTolerance), "normal tolerance must be > 0");
+    require(std::isfinite(s.motion.scaleX) && std::isfinite(s.motion.scaleY),
+            "motion scale must be finite");
     auto unit = [](float v) { return std::isfinite(v) && v >= 0.0f && v <= 1.0f; };
     require(unit(s.svgf.alpha), "svgf alpha must be in [0, 1]");
     require(unit(s.svgf.momentsAlpha), "svgf moments alpha must be in [0, 1]");

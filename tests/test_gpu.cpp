@@ -149,12 +149,12 @@ TEST(Gpu, DevicePointersGiveTheHostPathsResult) {
     auto deviceView = [&](const Frame& f) {
         FrameView v = viewOf(f);
         v.space = MemorySpace::Device;
-        v.beauty = static_cast<const float*>(toDevice(v.beauty, 3 * n * 4));
-        v.normal = static_cast<const float*>(toDevice(v.normal, 3 * n * 4));
-        v.position = static_cast<const float*>(toDevice(v.position, 3 * n * 4));
-        v.depth = static_cast<const float*>(toDevice(v.depth, n * 4));
-        v.objectId = static_cast<const std::int32_t*>(toDevice(v.objectId, n * 4));
-        if (v.albedo) v.albedo = static_cast<const float*>(toDevice(v.albedo, 3 * n * 4));
+        v.beauty = static_cast<const float*>(toDevice(v.beauty.data, 3 * n * 4));
+        v.normal = static_cast<const float*>(toDevice(v.normal.data, 3 * n * 4));
+        v.position = static_cast<const float*>(toDevice(v.position.data, 3 * n * 4));
+        v.depth = static_cast<const float*>(toDevice(v.depth.data, n * 4));
+        v.objectId = static_cast<const std::int32_t*>(toDevice(v.objectId.data, n * 4));
+        if (v.albedo) v.albedo = static_cast<const float*>(toDevice(v.albedo.data, 3 * n * 4));
         return v;
     };
     float* output = static_cast<float*>(toDevice(frames[0].beauty.pixels.data(), 3 * n * 4));

@@ -360,6 +360,17 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     c.add_option("--normal-tolerance", s.history.normalTolerance,
                  "[>0] reject history if |dn| > t * (fwidth(n) + 0.01)")
         ->capture_default_str();
+    c.add_option_function<std::vector<float>>(
+         "--motion-scale",
+         [&s](const std::vector<float>& v) {
+             s.motion.scaleX = v[0];
+             s.motion.scaleY = v[1];
+         },
+         "X,Y: motion vectors times these (default 1,1: pixels, y down; W,-H: UV units, y up)")
+        ->delimiter(',')
+        ->expected(2);
+    c.add_flag("--motion-current-minus-previous", s.motion.currentMinusPrevious,
+               "motion vectors point from the previous frame to this one (sign flipped)");
     c.add_option("--svgf-alpha", s.svgf.alpha, "[0,1] svgf colour: current-frame weight floor")
         ->capture_default_str();
     c.add_option("--svgf-moments-alpha", s.svgf.momentsAlpha,

@@ -58,6 +58,8 @@ class Denoiser {
     // `outputRgb` (width * height interleaved RGB floats) is in the same memory space. Sizes
     // are the caller's to get right; IDs are checked in either space (the ingest flags them).
     void processFrame(const FrameView& frame, float* outputRgb);
+    // Same, the result in the caller's layout (float or half, 3 or 4 channels, strides).
+    void processFrame(const FrameView& frame, const OutputView& output);
 
     // Forgets the history (e.g. at a camera cut).
     void reset();

@@ -84,20 +84,69 @@ enum class MemorySpace {
              // a Denoiser on a GPU device
 };
 
-// A frame in buffers the caller owns (nothing is copied on the host side): beauty, normal,
-// position and albedo interleaved RGB floats, depth one float, IDs one int32 per pixel, rows
-// top to bottom, width * height pixels each, all in `space`. The matrices are on the host.
+// The element type of a buffer's values.
+enum class DataType {
+    Float32,
+    Float16,  // IEEE 754 half (what GPU renderers keep RGBA buffers in)
+    Int32,    // object IDs
+};
+
+// One image of a FrameView in the caller's layout (as OpenImageIO's image_span or OIDN's
+// setImage): pixel (x, y) at data + y * rowStride + x * pixelStride bytes, its first `channels`
+// values of `type`. Strides 0 mean packed. Converts from a packed float or int32 pointer, so
+// that `view.beauty = rgb` keeps meaning interleaved RGB floats.
+struct ImageView {
+    const void* data = nullptr;
+    DataType type = DataType::Float32;
+    int channels = 0;             // values per pixel (0: the image's own count, e.g. 3 for RGB)
+    std::size_t pixelStride = 0;  // bytes from one pixel to the next (0: channels * value size)
+    std::size_t rowStride = 0;    // bytes from one row to the next (0: width * pixelStride)
+
+    ImageView() = default;
+    ImageView(std::nullptr_t) {}
+    ImageView(const float* packed) : data(packed) {}
+    ImageView(const std::int32_t* packed) : data(packed), type(DataType::Int32), channels(1) {}
+    ImageView(const void* data, DataType type, int channels, std::size_t pixelStride = 0,
+              std::size_t rowStride = 0)
+        : data(data),
+          type(type),
+          channels(channels),
+          pixelStride(pixelStride),
+          rowStride(rowStride) {}
+    explicit operator bool() const { return data != nullptr; }
+};
+
+// The result in the caller's layout: float or half, 3 channels (RGB) or 4 (alpha set to 1; to
+// keep the caller's own alpha, give 3 channels and a 4-channel pixel stride).
+struct OutputView {
+    void* data = nullptr;
+    DataType type = DataType::Float32;
+    int channels = 3;
+    std::size_t pixelStride = 0;
+    std::size_t rowStride = 0;
+};
+
+// A frame in buffers the caller owns, rows top to bottom, width * height pixels each, all in
+// `space` (the matrices are on the host). Nothing is copied where a buffer is packed float (int32
+// IDs) in memory the device reads; other layouts are converted on the device.
+// - beauty, albedo: RGB (3 or 4 channels, a 4th ignored); normal, position: xyz likewise;
+// - depth: 1 channel, see depthKind; objectId: int32, or float (IDs rounded), -1 on background;
+// - motion (optional): 2 channels in pixels, previous = current + motion (NVIDIA NRD's
+//   convention; DenoiserSettings::motion converts others), optionally a 3rd: previous depth minus
+//   current depth. With motion, no matrices are needed: objectCount alone bounds the IDs.
 struct FrameView {
     int width = 0;
     int height = 0;
     MemorySpace space = MemorySpace::Host;
-    const float* beauty = nullptr;
-    const float* normal = nullptr;
-    const float* position = nullptr;
-    const float* depth = nullptr;
-    const std::int32_t* objectId = nullptr;  // -1 or 0..objectCount-1 (checked on the device)
-    const float* albedo = nullptr;           // optional
-    const Matrix4* objectToWorld = nullptr;  // objectCount matrices
+    ImageView beauty;
+    ImageView normal;
+    ImageView position;
+    ImageView depth;
+    DepthKind depthKind = DepthKind::ViewZ;
+    ImageView objectId;                      // -1 or 0..objectCount-1 (checked on the device)
+    ImageView albedo;                        // optional
+    ImageView motion;                        // optional: replaces the matrices
+    const Matrix4* objectToWorld = nullptr;  // objectCount matrices (unused with motion)
     int objectCount = 0;
     Matrix4 worldToCamera = Matrix4::identity();
     Matrix4 worldToScreen = Matrix4::identity();
@@ -112,10 +161,14 @@ inline FrameView viewOf(const Frame& frame) {
     v.normal = frame.normal.pixels.data();
     v.position = frame.position.pixels.data();
     v.depth = frame.depth.pixels.data();
+    v.depthKind = frame.depthKind;
     v.objectId = frame.objectId.data();
-    v.albedo = frame.albedo ? frame.albedo->pixels.data() : nullptr;
+    if (frame.albedo) v.albedo = frame.albedo->pixels.data();
+    if (frame.motion)
+        v.motion =
+            ImageView(frame.motion->pixels.data(), DataType::Float32, frame.motion->channels);
     v.objectToWorld = frame.objectToWorld.data();
-    v.objectCount = int(frame.objectToWorld.size());
+    v.objectCount = frame.objectCount > 0 ? frame.objectCount : int(frame.objectToWorld.size());
     v.worldToCamera = frame.worldToCamera;
     v.worldToScreen = frame.worldToScreen;
     return v;

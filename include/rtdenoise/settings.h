@@ -57,6 +57,15 @@ struct HistorySettings {
     float normalTolerance = 16.0f;  // [>0] reject if |dn| > tolerance * (fwidth(n) + 0.01)
 };
 
+// How a frame's motion vectors (FrameView::motion) map to rtdenoise's convention, NVIDIA NRD's:
+// previous pixel = current pixel + motion, in pixels, y down.
+struct MotionSettings {
+    float scaleX = 1.0f;  // [finite] multiplies x: 1 for pixels, the width for UV units
+    float scaleY = 1.0f;  // [finite] multiplies y: -1 (or -height in UV units) where y points up
+    bool currentMinusPrevious = false;  // the vectors point from the previous frame to this one
+                                        // (motion = current - previous): their sign is flipped
+};
+
 struct SvgfSettings {
     float alpha = 0.2f;           // [0, 1] colour: weight of the current frame, at least 1/history
     float momentsAlpha = 0.2f;    // [0, 1] the same for the luminance moments
@@ -97,6 +106,7 @@ struct DenoiserSettings {
     OutlierSettings outlier;
     TemporalSettings temporal;
     HistorySettings history;
+    MotionSettings motion;
     SvgfSettings svgf;
     AlbedoSettings albedo;
 };

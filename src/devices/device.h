@@ -54,6 +54,7 @@ class Device {
     virtual void run(const SvgfVarianceStep& step) = 0;
     virtual void run(const SvgfAtrousIterationStep& step) = 0;
     virtual void run(const ModulateStep& step) = 0;
+    virtual void run(const ConvertStep& step) = 0;
 
     // Timestamps in the device's own order of work (slot 0 up to kTimestampSlots - 1), read
     // after synchronize(): the time between two, in milliseconds.

@@ -6,6 +6,7 @@
 
 #include "kernels/accumulate.h"
 #include "kernels/atrous.h"
+#include "kernels/convert.h"
 #include "kernels/ingest.h"
 #include "kernels/jbf.h"
 #include "kernels/modulate.h"
@@ -32,8 +33,21 @@ enum class StepKind {
 
 // The frame's buffers into the device's images. Its guide (normal + depth, 4 planes) may be
 // written interleaved: the device reads it back the same way in every step.
+// hasMotion: also the motion vectors into the history test's previous positions.
 struct IngestStep {
     IngestKernel ingest;
+    MotionIngestKernel motion = {};
+    bool hasMotion = false;
+};
+
+// A caller's buffer into packed floats or IDs, the result into the caller's layout, or a ray
+// distance into view depth (convert.h): before and after a frame's passes, where its buffers are
+// not packed float.
+struct ConvertStep {
+    enum class Kind { Input, ViewDepth, Output } kind = Kind::Input;
+    ConvertInputKernel input = {};
+    ViewDepthFromPositionKernel viewDepth = {};
+    WriteOutputKernel output = {};
 };
 
 // Firefly removal of `in` into `out`. clampSums, where set: also the colour row sums of `out`
@@ -175,6 +189,21 @@ void runDespeckleStep(const DespeckleStep& s, bool tiles, Launch&& launch) {
         launch(OutlierWideKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
     }
     if (s.clampSums.data) launch(ColorRowSumsKernel{s.g, s.out, s.clampSums, kSvgfWindowRadius});
+}
+
+template <class Launch>
+void runConvertStep(const ConvertStep& s, Launch&& launch) {
+    switch (s.kind) {
+        case ConvertStep::Kind::Input:
+            launch(s.input);
+            break;
+        case ConvertStep::Kind::ViewDepth:
+            launch(s.viewDepth);
+            break;
+        case ConvertStep::Kind::Output:
+            launch(s.output);
+            break;
+    }
 }
 
 // Calls run.template operator()<MaxRadius>() with the window instantiation (window_sums.h) that

@@ -25,12 +25,16 @@ struct ObjectReprojection {
     std::int32_t valid;  // 0 if the object did not exist in the previous frame or is singular
 };
 
-// What the previous frame looked like, for the history test.
+// What the previous frame looked like, for the history test, and where each pixel was in it.
 struct PreviousGeometry {
     const std::int32_t* objectId;
     const float* depth;
     Planes3 normal;
     NormalDepth4 normalDepth = {};  // the GPU's: normal and depth interleaved (views.h)
+    // With motion vectors (fromMotion): each pixel's previous position and expected depth
+    // (MotionIngestKernel), in place of the object's matrix.
+    Planes3 motion = {};
+    int fromMotion = 0;
 };
 
 // The previous-frame pixels that may hold pixel i's history, and their weights (summing to 1
@@ -102,10 +106,17 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
 
     Float3 position = g.position.load(i);
     Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
-    bool inFront = s.w > 0.0f;  // false behind the previous camera, or NaN
-    float inverseW = 1.0f / (inFront ? s.w : 1.0f);
+    // Motion vectors: the previous pixel and depth are given (the object's matrix is the
+    // identity then, and s unused). Both ways are computed and one selected: no branch.
+    // Without motion the position is loaded in their place: already loaded, no memory traffic.
+    bool fromMotion = previous.fromMotion != 0;
+    Float3 moved = (fromMotion ? previous.motion : g.position).load(i);
+    float expectedDepth = fromMotion ? moved.z : s.w;
+    bool inFront = expectedDepth > 0.0f;  // false behind the previous camera, or NaN
+    float inverseW = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
     // Continuous coordinates in which pixel centres are integers.
-    float sx = s.x * inverseW - 0.5f, sy = s.y * inverseW - 0.5f;
+    float sx = fromMotion ? moved.x : s.x * inverseW - 0.5f;
+    float sy = fromMotion ? moved.y : s.y * inverseW - 0.5f;
     bool onScreen =
         inFront && sx > -1.0f && sx < float(L.width) && sy > -1.0f && sy < float(L.height);
     sx = onScreen ? sx : 0.0f;
@@ -154,9 +165,9 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     RTD_UNROLL
     for (int t = 0; t < kTaps; ++t) {
         int tx = firstX + t % kSide, ty = firstY + t / kSide;
-        bool ok = acceptHistory(test, id, previousId[t], s.w, previousDepth[t], fwidthDepth,
-                                expectedNormal, make3(previousNx[t], previousNy[t], previousNz[t]),
-                                fwidthNormal);
+        bool ok = acceptHistory(test, id, previousId[t], expectedDepth, previousDepth[t],
+                                fwidthDepth, expectedNormal,
+                                make3(previousNx[t], previousNy[t], previousNz[t]), fwidthNormal);
         float wx = tx == x0 ? 1.0f - fx : tx == x0 + 1 ? fx : 0.0f;
         float wy = ty == y0 ? 1.0f - fy : ty == y0 + 1 ? fy : 0.0f;
         accepted[t] = ok;

@@ -19,6 +19,7 @@ struct FrameImages {
     ResourceId filterKeys;  // int32: GBufferView::filterKey
     ResourceId inputFlags;  // bytes, unpadded: IngestKernel::inputFlags
     ResourceId windowSums;  // 7 planes: window statistics of the firefly removal and clamps
+    ResourceId motion;      // temporal methods, 3 planes: MotionIngestKernel's (frames with motion)
 };
 
 // Declares `settings.method` into `pipeline`; returns the ingest's images.

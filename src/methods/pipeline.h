@@ -62,6 +62,7 @@ struct FrameBinding {
     const float* depth = nullptr;
     const std::int32_t* objectId = nullptr;
     const float* albedo = nullptr;  // null: no demodulation
+    InputSpan motion;               // the caller's motion vectors (data null: the matrices)
     int objectCount = 0;
     const ObjectReprojection* objects = nullptr;  // the matrices, one per object
     int hasHistory = 0;

@@ -64,15 +64,18 @@ GBufferView gbuffer(const PassContext& c, const FrameImages& f) {
 PreviousGeometry previousGeometry(const PassContext& c, const FrameImages& f) {
     float* guide = c.floats(previous(f.guide));
     int planeSize = c.layout().planeSize;
+    const bool fromMotion = c.frame().motion.data != nullptr;
     return {c.ints(previous(f.objectId)),
             guide + 3 * std::size_t(planeSize),
             {guide, planeSize},
-            {guide}};
+            {guide},
+            fromMotion ? c.planes(f.motion) : Planes3{},
+            fromMotion ? 1 : 0};
 }
 
 std::vector<ResourceId> reprojectionReads(const Pipeline& p, const FrameImages& f) {
     return with(gbufferReads(f),
-                {previous(f.guide), previous(f.objectId), p.matrices(), p.frame()});
+                {previous(f.guide), previous(f.objectId), f.motion, p.matrices(), p.frame()});
 }
 
 ResourceId declareValidity(Pipeline& p) {
@@ -103,14 +106,27 @@ FrameImages declareIngest(Pipeline& p, const DenoiserSettings& settings) {
     f.inputFlags = p.declare({.name = "inputFlags", .element = Element::Byte, .padded = false});
     bool temporal = settings.method == Method::Temporal || settings.method == Method::Svgf;
     if (temporal || settings.outlier.enabled) f.windowSums = p.declare(floatImage("windowSums", 7));
+    std::vector<ResourceId> writes = {f.noisy,    f.albedo,     f.guide,     f.position,
+                                      f.objectId, f.filterKeys, f.inputFlags};
+    if (temporal) {
+        f.motion = p.declare(floatImage("motion", 3));
+        writes.push_back(f.motion);
+    }
     const float epsilon = settings.albedo.epsilon;
     const int separateObjects = settings.edges.separateObjects ? 1 : 0;
-    p.addPass("ingest", StepKind::Ingest, {p.frame()},
-              {f.noisy, f.albedo, f.guide, f.position, f.objectId, f.filterKeys, f.inputFlags}, 0,
-              [f, epsilon, separateObjects](const PassContext& c) {
+    const float motionSign = settings.motion.currentMinusPrevious ? -1.0f : 1.0f;
+    const float motionScale[3] = {motionSign * settings.motion.scaleX,
+                                  motionSign * settings.motion.scaleY, motionSign};
+    p.addPass("ingest", StepKind::Ingest, {p.frame()}, writes, 0,
+              [f, epsilon, separateObjects, motionScale](const PassContext& c) {
                   const FrameBinding& in = c.frame();
                   float* guide = c.floats(f.guide);  // normal planes + depth, or interleaved
                   const int planeSize = c.layout().planeSize;
+                  const bool hasMotion = in.motion.data != nullptr;
+                  MotionIngestKernel motion;
+                  if (hasMotion)
+                      motion = {c.layout(),     in.motion,      in.depth,          motionScale[0],
+                                motionScale[1], motionScale[2], c.planes(f.motion)};
                   c.device().run(IngestStep{{c.layout(),
                                              in.beauty,
                                              in.normal,
@@ -129,7 +145,9 @@ FrameImages declareIngest(Pipeline& p, const DenoiserSettings& settings) {
                                              c.bytes(f.inputFlags),
                                              {guide},
                                              c.ints(f.filterKeys),
-                                             separateObjects}});
+                                             separateObjects},
+                                            motion,
+                                            hasMotion});
               });
     return f;
 }

@@ -66,7 +66,13 @@ class CpuDevice final : public Device {
         if (has(StepKind::SvgfTemporalStage)) planes(svgfHistory_, kSvgfHistoryPlanes);
     }
 
-    void run(const IngestStep& s) override { launch(s.ingest); }
+    void run(const IngestStep& s) override {
+        launch(s.ingest);
+        if (s.hasMotion) launch(s.motion);
+    }
+    void run(const ConvertStep& s) override {
+        runConvertStep(s, [this](const auto& k) { launch(k); });
+    }
     void run(const DespeckleStep& s) override {
         runDespeckleStep(s, tiles_, [this](const auto& k) { launch(k); });
     }

@@ -16,6 +16,10 @@ namespace rtd {
 // run on the CPU by the tests only, through parallelFor2D itself.
 #define RTD_FOR_EACH_CPU_KERNEL(X)        \
     X(IngestKernel)                       \
+    X(MotionIngestKernel)                 \
+    X(ConvertInputKernel)                 \
+    X(ViewDepthFromPositionKernel)        \
+    X(WriteOutputKernel)                  \
     X(LuminanceRowSumsKernel)             \
     X(LuminanceRowSumsWideKernel)         \
     X(ColorRowSumsKernel)                 \

@@ -200,6 +200,10 @@ class CudaDevice final : public Device {
 
     void run(const IngestStep& s) override {
         interleaved_ ? launch(ingestForm<true>(s.ingest)) : launch(s.ingest);
+        if (s.hasMotion) launch(s.motion);
+    }
+    void run(const ConvertStep& s) override {
+        runConvertStep(s, [this](const auto& k) { launch(k); });
     }
     void run(const DespeckleStep& s) override {
         runDespeckleStep(s, tiles_, [this](const auto& k) { launch(k); });

@@ -1,0 +1,351 @@
+// What renderers hand the denoiser: motion vectors instead of matrices, and buffers in other
+// layouts (half, RGBA, strides, float IDs, ray distances), each against the packed float path.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "core/math.h"
+#include "kernels/convert.h"
+#include "metrics/metrics.h"
+#include "render/render_sequence.h"
+#include "rtdenoise/denoiser.h"
+#include "rtdenoise/error.h"
+#include "rtdenoise/io.h"
+#include "test_support.h"
+
+namespace rtd {
+namespace {
+
+Mat4 toMat4(const Matrix4& m) {
+    Mat4 r{};
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) r.m[i][j] = m.m[i][j];
+    return r;
+}
+
+// Frame `current`'s motion vectors (NRD's convention, 3 channels: pixels and the depth change)
+// from the matrices of it and `previous`, as the back-projection computes them.
+Image motionFromMatrices(const Frame& previous, const Frame& current) {
+    const int w = current.width(), h = current.height();
+    Image motion(w, h, 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            std::int32_t id = current.objectId[std::size_t(y) * w + x];
+            if (id < 0) continue;
+            Mat4 inverseModel;
+            EXPECT_TRUE(invert(toMat4(current.objectToWorld[id]), inverseModel));
+            Mat4 toScreen = multiply(toMat4(previous.worldToScreen),
+                                     multiply(toMat4(previous.objectToWorld[id]), inverseModel));
+            Float3 p = make3(current.position.at(x, y, 0), current.position.at(x, y, 1),
+                             current.position.at(x, y, 2));
+            Float4 s = transformPoint(toScreen, p);
+            // As findHistory computes the previous pixel (by the reciprocal), so that adding
+            // the pixel back gives its value.
+            float inverseW = 1.0f / s.w;
+            motion.at(x, y, 0) = (s.x * inverseW - 0.5f) - float(x);
+            motion.at(x, y, 1) = (s.y * inverseW - 0.5f) - float(y);
+            motion.at(x, y, 2) = s.w - current.depth.at(x, y);
+        }
+    return motion;
+}
+
+// The frames with motion vectors in place of their matrices.
+std::vector<Frame> withMotion(std::vector<Frame> frames, int channels = 3) {
+    std::vector<Frame> out = frames;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        Image m = motionFromMatrices(frames[i == 0 ? 0 : i - 1], frames[i]);
+        if (channels == 2) {
+            Image two(m.width, m.height, 2);
+            for (std::size_t p = 0; p < m.pixelCount(); ++p)
+                for (int c = 0; c < 2; ++c) two.pixels[2 * p + c] = m.pixels[3 * p + c];
+            m = two;
+        }
+        out[i].motion = m;
+        out[i].objectCount = int(frames[i].objectToWorld.size());
+        out[i].objectToWorld.clear();
+    }
+    return out;
+}
+
+const std::vector<Frame>& cameraPanFrames() {
+    static const std::vector<Frame> frames = test::renderSmallSequence("camera-pan", 96, 64, 4);
+    return frames;
+}
+
+// NRD's convention, previous = current + motion: with the motion the matrices imply (camera
+// motion here; the objects do not rotate), every temporal method gives the matrix path's result.
+TEST(MotionVectors, FromTheMatricesGiveTheMatrixPathsResult) {
+    const std::vector<Frame>& frames = cameraPanFrames();
+    std::vector<Frame> moving = withMotion(frames);
+    for (Method method : {Method::Temporal, Method::Svgf}) {
+        Denoiser matrices(test::cpuSettings(method)), motion(test::cpuSettings(method));
+        for (std::size_t i = 0; i < frames.size(); ++i) {
+            Image expected = matrices.processFrame(frames[i]);
+            Image got = motion.processFrame(moving[i]);
+            EXPECT_LE(test::maxRelativeDifference(expected, got), 1e-4)
+                << toString(method) << " frame " << i;
+        }
+    }
+}
+
+// Other conventions through the settings: UV units (scale by the size), y up (negative scale),
+// current - previous (the flag): each gives the pixel convention's result.
+TEST(MotionVectors, ScaleAndSignSettingsCoverOtherConventions) {
+    const std::vector<Frame>& frames = cameraPanFrames();
+    std::vector<Frame> pixels = withMotion(frames);
+    const float w = float(frames[0].width()), h = float(frames[0].height());
+    std::vector<Frame> uvUp = pixels, reversed = pixels;
+    for (std::size_t i = 0; i < frames.size(); ++i)
+        for (std::size_t p = 0; p < pixels[i].motion->pixelCount(); ++p) {
+            float* uv = &uvUp[i].motion->pixels[3 * p];
+            uv[0] /= w;
+            uv[1] /= -h;
+            float* back = &reversed[i].motion->pixels[3 * p];
+            for (int c = 0; c < 3; ++c) back[c] = -back[c];
+        }
+    DenoiserSettings s = test::cpuSettings(Method::Svgf);
+    DenoiserSettings uvSettings = s, reversedSettings = s;
+    uvSettings.motion.scaleX = w;
+    uvSettings.motion.scaleY = -h;
+    reversedSettings.motion.currentMinusPrevious = true;
+    Denoiser a(s), b(uvSettings), c(reversedSettings);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        Image expected = a.processFrame(pixels[i]);
+        EXPECT_LE(test::maxRelativeDifference(expected, b.processFrame(uvUp[i])), 1e-4) << i;
+        EXPECT_LE(test::maxRelativeDifference(expected, c.processFrame(reversed[i])), 1e-6) << i;
+    }
+}
+
+// A sign flipped by mistake (the vectors read as current - previous) is caught by the quality it
+// costs against a converged reference, and 2-channel motion (no depth change) costs little.
+TEST(MotionVectors, AFlippedSignMeasuresWorse) {
+    test::TempFolder dir("motion-sign");
+    render::RenderSettings r;
+    r.width = 96;
+    r.height = 64;
+    r.frames = 8;
+    r.referenceSpp = 64;
+    render::renderSequence("camera-pan", r, dir.path());
+    Sequence sequence(dir.path());
+    std::vector<Frame> frames;
+    for (int i = 0; i < sequence.frameCount(); ++i) frames.push_back(sequence.readFrame(i));
+    std::vector<Frame> moving = withMotion(frames), flat = withMotion(frames, 2);
+    // The temporal method: its result leans on the history most (SVGF's spatial filter hides
+    // much of a misplaced history on this scene, docs/inputs.md).
+    DenoiserSettings s = test::cpuSettings(Method::Temporal), flipped = s;
+    flipped.motion.currentMinusPrevious = true;
+    Denoiser right(s), wrong(flipped), twoChannels(s);
+    double rightError = 0, wrongError = 0, twoChannelError = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        Image reference = readExr(dir.path() / "reference" / fmt::format("reference_{}.exr", i),
+                                  {{"R"}, {"G"}, {"B"}});
+        rightError += metrics::relMse(right.processFrame(moving[i]), reference);
+        wrongError += metrics::relMse(wrong.processFrame(moving[i]), reference);
+        twoChannelError += metrics::relMse(twoChannels.processFrame(flat[i]), reference);
+    }
+    EXPECT_GT(wrongError, 1.2 * rightError) << rightError << " vs " << wrongError;
+    EXPECT_LT(twoChannelError, 1.05 * rightError) << rightError << " vs " << twoChannelError;
+}
+
+// ---- buffer layouts ----
+
+// Packed floats as `channels` values of `type` per pixel, `padBytes` after each pixel and
+// `rowPadBytes` after each row.
+struct Strided {
+    std::vector<unsigned char> bytes;
+    ImageView view;
+};
+Strided strided(const std::vector<float>& packed, int width, int height, int ownChannels,
+                DataType type, int channels, int padBytes, int rowPadBytes) {
+    const std::size_t valueBytes = type == DataType::Float16 ? 2 : 4;
+    const std::size_t pixelStride = channels * valueBytes + padBytes;
+    const std::size_t rowStride = width * pixelStride + rowPadBytes;
+    Strided s;
+    s.bytes.assign(rowStride * height, 0xAB);  // padding that must never be read as values
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            for (int c = 0; c < channels; ++c) {
+                float v = c < ownChannels ? packed[(std::size_t(y) * width + x) * ownChannels + c]
+                                          : 7.0f;  // a 4th channel: ignored
+                unsigned char* p = &s.bytes[y * rowStride + x * pixelStride + c * valueBytes];
+                if (type == DataType::Float16) {
+                    std::uint16_t hv = floatToHalf(v);
+                    std::memcpy(p, &hv, 2);
+                } else if (type == DataType::Int32) {
+                    std::int32_t iv = std::int32_t(v);
+                    std::memcpy(p, &iv, 4);
+                } else {
+                    std::memcpy(p, &v, 4);
+                }
+            }
+    s.view = ImageView(s.bytes.data(), type, channels, pixelStride, rowStride);
+    return s;
+}
+
+std::vector<float> halfRounded(std::vector<float> v) {
+    for (float& x : v) x = halfToFloat(floatToHalf(x));
+    return v;
+}
+
+TEST(Half, ConversionRoundsToNearestEvenAndKeepsSpecialValues) {
+    EXPECT_EQ(floatToHalf(1.0f), 0x3c00);
+    EXPECT_EQ(floatToHalf(-2.0f), 0xc000);
+    EXPECT_EQ(floatToHalf(65504.0f), 0x7bff);
+    EXPECT_EQ(floatToHalf(65520.0f), 0x7c00);               // rounds past the largest: infinity
+    EXPECT_EQ(floatToHalf(1.0f + 1.0f / 2048.0f), 0x3c00);  // a tie: to even
+    EXPECT_EQ(floatToHalf(1.0f + 3.0f / 2048.0f), 0x3c02);  // a tie: to even (up)
+    EXPECT_EQ(floatToHalf(5.9604645e-8f), 0x0001);          // the smallest subnormal
+    EXPECT_EQ(floatToHalf(1e-9f), 0x0000);
+    EXPECT_TRUE(std::isnan(halfToFloat(floatToHalf(NAN))));
+    EXPECT_EQ(halfToFloat(0x7c00), INFINITY);
+    EXPECT_EQ(halfToFloat(0x0001), 5.9604645e-8f);
+    EXPECT_EQ(halfToFloat(0x3555), 0.333251953125f);
+    // Every finite half survives the round trip.
+    for (std::uint32_t h = 0; h < 0x10000; ++h)
+        if ((h & 0x7c00) != 0x7c00) EXPECT_EQ(floatToHalf(halfToFloat(std::uint16_t(h))), h);
+}
+
+// RGBA half buffers with pixel and row padding, float IDs, float RGBA: each gives the result of
+// the packed float path on the same values (the half ones rounded), bit for bit.
+TEST(FrameLayouts, EachFormatGivesThePackedFloatResult) {
+    const std::vector<Frame>& frames = cameraPanFrames();
+    const int w = frames[0].width(), h = frames[0].height();
+    for (DataType type : {DataType::Float32, DataType::Float16}) {
+        Denoiser packed(test::cpuSettings(Method::Svgf)), laidOut(test::cpuSettings(Method::Svgf));
+        for (const Frame& original : frames) {
+            Frame f = original;
+            if (type == DataType::Float16)
+                for (Image* image : {&f.beauty, &f.normal, &f.position, &f.depth})
+                    image->pixels = halfRounded(image->pixels);
+            f.albedo = f.beauty;  // any positive image: the demodulation path runs
+            for (float& v : f.albedo->pixels) v = 0.25f + 0.5f * std::fabs(v) / (1.0f + v);
+            if (type == DataType::Float16) f.albedo->pixels = halfRounded(f.albedo->pixels);
+            Image expected = packed.processFrame(f);
+
+            Strided beauty = strided(f.beauty.pixels, w, h, 3, type, 4, 0, 32);
+            Strided normal = strided(f.normal.pixels, w, h, 3, type, 4, 4, 0);
+            Strided position = strided(f.position.pixels, w, h, 3, type, 3, 2, 6);
+            Strided depth = strided(f.depth.pixels, w, h, 1, type, 1, 0, 0);
+            Strided albedo = strided(f.albedo->pixels, w, h, 3, type, 4, 0, 0);
+            std::vector<float> ids(f.objectId.begin(), f.objectId.end());
+            Strided idFloats = strided(ids, w, h, 1, DataType::Float32, 1, 4, 0);
+            FrameView v = viewOf(f);
+            v.beauty = beauty.view;
+            v.normal = normal.view;
+            v.position = position.view;
+            v.depth = depth.view;
+            v.albedo = albedo.view;
+            v.objectId = idFloats.view;
+            std::vector<float> got(3 * std::size_t(w) * h);
+            laidOut.processFrame(v, got.data());
+            EXPECT_EQ(got, expected.pixels) << (type == DataType::Float16 ? "half" : "float");
+        }
+    }
+}
+
+// The result in half RGBA with a row pitch, or in RGB floats inside RGBA pixels (the caller's
+// alpha kept): the float result, rounded where half, the padding untouched.
+TEST(FrameLayouts, OutputsInOtherLayouts) {
+    const Frame& f = cameraPanFrames()[0];
+    const int w = f.width(), h = f.height();
+    Denoiser a(test::cpuSettings(Method::Atrous));
+    Image expected = a.processFrame(f);
+    const std::size_t halfRow = w * 8 + 16;
+    std::vector<unsigned char> half(halfRow * h, 0xCD);
+    OutputView halfOut{half.data(), DataType::Float16, 4, 8, halfRow};
+    a.processFrame(viewOf(f), halfOut);
+    std::vector<float> rgba(4 * std::size_t(w) * h, -3.0f);
+    OutputView keepAlpha{rgba.data(), DataType::Float32, 3, 16, 0};
+    a.processFrame(viewOf(f), keepAlpha);
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            for (int c = 0; c < 4; ++c) {
+                std::uint16_t v;
+                std::memcpy(&v, &half[y * halfRow + x * 8 + 2 * c], 2);
+                float want = c < 3 ? expected.at(x, y, c) : 1.0f;
+                ASSERT_EQ(v, floatToHalf(want)) << x << "," << y << "," << c;
+                float got = rgba[(std::size_t(y) * w + x) * 4 + c];
+                ASSERT_EQ(got, c < 3 ? expected.at(x, y, c) : -3.0f) << x << "," << y;
+            }
+        }
+        for (std::size_t b = w * 8; b < halfRow; ++b) ASSERT_EQ(half[y * halfRow + b], 0xCD);
+    }
+}
+
+// A depth given as distance along the ray gives, with matrices, the view depth's result (the
+// view depth then comes from the position).
+TEST(FrameLayouts, RayDistanceDepthGivesTheViewDepthResult) {
+    const std::vector<Frame>& frames = cameraPanFrames();
+    Denoiser viewZ(test::cpuSettings(Method::Svgf)), ray(test::cpuSettings(Method::Svgf));
+    for (const Frame& f : frames) {
+        Mat4 cameraToWorld;
+        ASSERT_TRUE(invert(toMat4(f.worldToCamera), cameraToWorld));
+        Float3 eye = make3(cameraToWorld.m[0][3], cameraToWorld.m[1][3], cameraToWorld.m[2][3]);
+        Frame g = f;
+        g.depthKind = DepthKind::RayDistance;
+        for (int y = 0; y < f.height(); ++y)
+            for (int x = 0; x < f.width(); ++x) {
+                Float3 p =
+                    make3(f.position.at(x, y, 0), f.position.at(x, y, 1), f.position.at(x, y, 2));
+                Float3 d = p - eye;
+                if (f.depth.at(x, y) > 0.0f) g.depth.at(x, y) = std::sqrt(dot(d, d));
+            }
+        EXPECT_LE(test::maxRelativeDifference(viewZ.processFrame(f), ray.processFrame(g)), 1e-3);
+    }
+}
+
+TEST(FrameLayouts, BadLayoutsAreRefusedNamingTheBuffer) {
+    const Frame& f = cameraPanFrames()[0];
+    Denoiser d(test::cpuSettings(Method::Svgf));
+    std::vector<float> out(3 * f.beauty.pixelCount());
+    auto refused = [&](FrameView v, const std::string& what, OutputView o = {}) {
+        if (!o.data) o.data = out.data();
+        try {
+            d.processFrame(v, o);
+            ADD_FAILURE() << "accepted: " << what;
+        } catch (const Error& e) {
+            EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    FrameView v = viewOf(f);
+    v.beauty = ImageView(f.beauty.pixels.data(), DataType::Int32, 3);
+    refused(v, "beauty");
+    v = viewOf(f);
+    v.normal = ImageView(f.normal.pixels.data(), DataType::Float32, 2);
+    refused(v, "normal has 2 channels");
+    v = viewOf(f);
+    v.position = ImageView(f.position.pixels.data(), DataType::Float32, 3, 8);
+    refused(v, "position: strides");
+    v = viewOf(f);
+    v.depth = nullptr;
+    refused(v, "depth buffer is missing");
+    v = viewOf(f);
+    v.motion = ImageView(f.depth.pixels.data(), DataType::Float32, 1);
+    refused(v, "motion has 1 channels");
+    refused(viewOf(f), "output must be", OutputView{out.data(), DataType::Int32, 3});
+    refused(viewOf(f), "output must be", OutputView{out.data(), DataType::Float32, 2});
+    v = viewOf(f);
+    v.objectToWorld = nullptr;  // neither matrices nor motion
+    refused(v, "objectToWorld is missing");
+    // Still usable after every refusal.
+    EXPECT_NO_THROW(d.processFrame(viewOf(f), out.data()));
+}
+
+// Non-finite motion means no history there (a first-frame pixel), never a NaN in the result.
+TEST(MotionVectors, NonFiniteMotionGivesAFiniteResult) {
+    std::vector<Frame> frames = withMotion(cameraPanFrames());
+    for (Frame& f : frames)
+        for (std::size_t p = 0; p < f.motion->pixelCount(); p += 7)
+            f.motion->pixels[3 * p + p % 3] = p % 2 ? NAN : INFINITY;
+    for (Method method : {Method::Temporal, Method::Svgf}) {
+        Denoiser d(test::cpuSettings(method));
+        for (const Frame& f : frames)
+            for (float v : d.processFrame(f).pixels) ASSERT_TRUE(std::isfinite(v));
+    }
+}
+
+}  // namespace
+}  // namespace rtd
