@@ -11,6 +11,7 @@
 #include <cuda_runtime.h>
 #endif
 
+#include "input_helpers.h"
 #include "test_support.h"
 #include "tuning.h"
 
@@ -175,6 +176,81 @@ TEST(Gpu, DevicePointersGiveTheHostPathsResult) {
     } catch (const Error& e) {
         std::string expected = "object ID " + std::to_string(badId) + " at pixel (3, 5)";
         EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+    for (void* p : allocations) cudaFree(p);
+}
+// An engine's buffers: RGBA half colour, normal and position with a row pitch, 2-channel float
+// motion vectors and no matrices, half RGBA out; in device memory and in host memory. Gives the
+// CPU's packed float result on the same (half-rounded) values, to half precision.
+TEST(Gpu, HalfRgbaBuffersWithMotionVectors) {
+    std::string reason = cudaUnavailableReason();
+    if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
+    std::vector<Frame> frames =
+        test::withMotion(test::renderSmallSequence("camera-pan", 96, 64, 4), 2);
+    const int w = frames[0].width(), h = frames[0].height();
+    std::vector<void*> allocations;
+    auto toDevice = [&](const std::vector<unsigned char>& host) {
+        void* p = nullptr;
+        EXPECT_EQ(cudaMalloc(&p, host.size()), cudaSuccess);
+        EXPECT_EQ(cudaMemcpy(p, host.data(), host.size(), cudaMemcpyHostToDevice), cudaSuccess);
+        allocations.push_back(p);
+        return p;
+    };
+    DenoiserSettings s;
+    s.method = Method::Svgf;
+    s.device = DeviceType::Cpu;
+    Denoiser cpu(s);
+    s.device = DeviceType::Cuda;
+    Denoiser onDevice(s), fromHost(s);
+    const std::size_t outRow = std::size_t(w) * 8 + 64;
+    std::vector<unsigned char> out(outRow * h), outFromHost(outRow * h);
+    void* deviceOut = toDevice(out);
+    for (Frame& f : frames) {
+        for (Image* image : {&f.beauty, &f.normal, &f.position})
+            image->pixels = test::halfRounded(image->pixels);
+        f.albedo.reset();
+        Image expected = cpu.processFrame(f);
+        auto rgba = [&](const Image& image) {
+            return test::strided(image.pixels, w, h, 3, DataType::Float16, 4, 0, 64);
+        };
+        test::Strided beauty = rgba(f.beauty), normal = rgba(f.normal), position = rgba(f.position);
+        FrameView host = viewOf(f);
+        host.beauty = beauty.view;
+        host.normal = normal.view;
+        host.position = position.view;
+        FrameView device = host;
+        device.space = MemorySpace::Device;
+        auto moved = [&](const ImageView& v, std::size_t bytes) {
+            std::vector<unsigned char> copy(static_cast<const unsigned char*>(v.data),
+                                            static_cast<const unsigned char*>(v.data) + bytes);
+            ImageView d = v;
+            d.data = toDevice(copy);
+            return d;
+        };
+        const std::size_t n = std::size_t(w) * h;
+        device.beauty = moved(beauty.view, beauty.bytes.size());
+        device.normal = moved(normal.view, normal.bytes.size());
+        device.position = moved(position.view, position.bytes.size());
+        device.depth = moved(host.depth, n * 4);
+        device.objectId = moved(host.objectId, n * 4);
+        device.motion = moved(host.motion, n * 8);
+        onDevice.processFrame(device, OutputView{deviceOut, DataType::Float16, 4, 8, outRow});
+        fromHost.processFrame(host,
+                              OutputView{outFromHost.data(), DataType::Float16, 4, 8, outRow});
+        ASSERT_EQ(cudaMemcpy(out.data(), deviceOut, out.size(), cudaMemcpyDeviceToHost),
+                  cudaSuccess);
+        Image got(w, h, 3), gotFromHost(w, h, 3);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    std::uint16_t a, b;
+                    std::memcpy(&a, &out[y * outRow + x * 8 + 2 * c], 2);
+                    std::memcpy(&b, &outFromHost[y * outRow + x * 8 + 2 * c], 2);
+                    got.at(x, y, c) = halfToFloat(a);
+                    gotFromHost.at(x, y, c) = halfToFloat(b);
+                }
+        EXPECT_LE(test::maxRelativeDifference(expected, got), 2e-3);
+        EXPECT_EQ(got.pixels, gotFromHost.pixels);
     }
     for (void* p : allocations) cudaFree(p);
 }
