@@ -46,6 +46,10 @@ void checkObjectIds(const std::int32_t* ids, int w, int h, int objectCount) {
     std::size_t n = std::size_t(w) * h;
     for (std::size_t i = 0; i < n; ++i) {
         std::int32_t id = ids[i];
+        if (id == ConvertInputKernel::kUnreadableId)
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("frame: the object ID at pixel ({}, {}) is not an integer",
+                                    i % w, i / w));
         if (id < -1 || id >= objectCount)
             throw Error(ErrorCode::InvalidInput,
                         fmt::format("frame: object ID {} at pixel ({}, {}) is outside -1..{}", id,

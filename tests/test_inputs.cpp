@@ -249,6 +249,11 @@ TEST(FrameLayouts, BadLayoutsAreRefusedNamingTheBuffer) {
     v = viewOf(f);
     v.objectToWorld = nullptr;  // neither matrices nor motion
     refused(v, "objectToWorld is missing");
+    std::vector<float> ids(f.objectId.begin(), f.objectId.end());
+    ids[5 * f.width() + 3] = 0.5f;
+    v = viewOf(f);
+    v.objectId = ids.data();
+    refused(v, "object ID at pixel (3, 5) is not an integer");
     // Still usable after every refusal.
     EXPECT_NO_THROW(d.processFrame(viewOf(f), out.data()));
 }
