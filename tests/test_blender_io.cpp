@@ -602,6 +602,21 @@ TEST_F(BlenderBroken, WithoutVectorHistoryMethodsFailNamingThePass) {
     EXPECT_FALSE(contains(r.output, "Vector")) << r.output;
 }
 
+// What Cycles writes with motion blur on: a Vector pass of zeros.
+TEST_F(BlenderBroken, AVectorPassOfZerosWarnsOnce) {
+    copyFixture(dir.path() / "in", [](int, std::map<std::string, Image>& channels) {
+        for (auto& [name, image] : channels)
+            if (passOf(name) == "Vector") std::fill(image.pixels.begin(), image.pixels.end(), 0.0f);
+    });
+    const BlenderSequence sequence(dir.path() / "in");
+    ASSERT_EQ(sequence.warnings().size(), 1u);
+    EXPECT_TRUE(contains(sequence.warnings()[0], "Vector pass is zero at every pixel"));
+    EXPECT_TRUE(contains(sequence.warnings()[0], "0002.exr"));
+    const test::CliResult r = runCli("denoise " + quoted(dir.path() / "in") + " --method jbf -o " +
+                                     quoted(dir.path() / "out"));
+    EXPECT_EQ(occurrences(r.output, "use_motion_blur"), 1) << r.output;
+}
+
 TEST_F(BlenderBroken, AnOptionalPassMissingFromALaterFrameIsAnError) {
     copyFixture(dir.path() / "in", withoutPass("Vector", {3}));
     const BlenderSequence sequence(dir.path() / "in");

@@ -126,7 +126,7 @@ def build_scene(args):
     scene.frame_start, scene.frame_end = first, last
     scene.render.resolution_x, scene.render.resolution_y = args.width, args.height
     scene.render.resolution_percentage = 100
-    scene.render.use_motion_blur = False  # Cycles writes the Vector pass only without it
+    scene.render.use_motion_blur = False  # with it on, Cycles writes a Vector pass of zeros
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.seed = args.seed

@@ -267,8 +267,7 @@ const PassInfo kAlbedo{"Denoising Albedo", "RGB",
 const PassInfo kVector{"Vector", "XY",
                        "View Layer Properties > Passes > Data > Vector "
                        "(view_layer.use_pass_vector = True) with motion blur off "
-                       "(scene.render.use_motion_blur = False: Cycles writes no Vector pass "
-                       "with it on)"};
+                       "(scene.render.use_motion_blur = False: with it on Cycles writes zeros)"};
 
 ChannelChoices channelsOf(const std::string& layer, const PassInfo& pass) {
     ChannelChoices choices;
@@ -398,6 +397,25 @@ BlenderSequence::BlenderSequence(const fs::path& input, std::string viewLayer)
             "{}: no Denoising Albedo pass: colour is filtered without albedo demodulation, "
             "textures blur (enable {})",
             first.string(), kAlbedo.howToEnable));
+    // With motion blur on Cycles still writes the Vector pass, all zeros. The second frame is
+    // looked at: the first one's vectors point before the animation, often legitimately zero.
+    if (hasMotion_ && files_.count > 1) {
+        const fs::path second = files_.file(1);
+        const std::vector<ViewLayer> secondLayers = viewLayersOf(readExrContents(second).channels);
+        // A second frame without the pass is checkFrames' error to report, not this one's.
+        if (std::any_of(secondLayers.begin(), secondLayers.end(), [this](const ViewLayer& l) {
+                return l.name == layer_ && l.has(kVector.name, kVector.components);
+            })) {
+            const Image vectors = readExr(second, channelsOf(layer_, kVector));
+            if (std::all_of(vectors.pixels.begin(), vectors.pixels.end(),
+                            [](float v) { return v == 0.0f; }))
+                warnings_.push_back(fmt::format(
+                    "{}: the Vector pass is zero at every pixel, as Cycles writes it with motion "
+                    "blur on: history then ignores all motion (render with "
+                    "scene.render.use_motion_blur = False; a shot where nothing moves is fine)",
+                    second.string()));
+        }
+    }
 }
 
 std::string BlenderSequence::backProjectionProblem() const {
