@@ -137,11 +137,11 @@ int runBench(const BenchOptions& o) {
                 render::renderSequence(o.scene, r, folder);
             }
         }
-        Sequence sequence(folder);
+        const std::unique_ptr<FrameSource> sequence = openFrameSource(folder);
         std::vector<Frame> frames;
         auto readStart = std::chrono::steady_clock::now();
-        int count = o.input.empty() ? o.inputFrames : std::min(sequence.frameCount(), 8);
-        for (int i = 0; i < count; ++i) frames.push_back(sequence.readFrame(i));
+        int count = o.input.empty() ? o.inputFrames : std::min(sequence->frameCount(), 8);
+        for (int i = 0; i < count; ++i) frames.push_back(sequence->readFrame(i));
         double readMs =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - readStart)
                 .count() /
@@ -259,7 +259,9 @@ Command addBenchCommand(CLI::App& app) {
         ->check(CLI::Range(2, 64))
         ->capture_default_str();
     c->add_option("--scene", o->scene, "Scene rendered for the inputs")->capture_default_str();
-    c->add_option("--input", o->input, "A sequence folder to use instead of rendered frames");
+    c->add_option("--input", o->input,
+                  "A sequence (a course folder, Blender multilayer EXRs or their pattern) to use "
+                  "instead of rendered frames");
     c->add_option("--cache", o->cache, "Folder for rendered inputs (default: the temp folder)");
     c->add_option("--json", o->json, "Also write the results as JSON");
     addTilePassesOption(*c, o->tilePasses,

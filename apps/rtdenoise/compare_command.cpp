@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -73,15 +74,49 @@ void requireSameSize(const fs::path& file, const Image& image, const fs::path& r
                                 resultFile.string(), sizeText(result)));
 }
 
+// REFERENCE_DIR's frames: reference_<i>.exr, or numbered EXRs as Blender writes them (0001.exr,
+// ...: frame i is the i-th number), their colour R, G, B or a multilayer file's Combined pass.
+struct References {
+    fs::path folder;
+    std::optional<NumberedFiles> numbered;
+    ChannelChoices channels = kRgb;
+    int count = 0;
+
+    fs::path file(int index) const {
+        return numbered ? numbered->file(index) : framePath(folder, "reference", index);
+    }
+};
+
+References findReferences(const fs::path& folder) {
+    References references{folder, std::nullopt, kRgb, 0};
+    std::error_code ec;
+    bool course = false, numbered = false;
+    for (fs::directory_iterator it(folder, ec); !ec && it != fs::directory_iterator();
+         it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        course = course || frameIndexOf(name, "reference") >= 0;
+        numbered = numbered || (name.ends_with(".exr") && name.size() > 4 &&
+                                std::isdigit(static_cast<unsigned char>(name[name.size() - 5])));
+    }
+    if (course || !numbered) {
+        references.count = countFrames(folder, "reference");
+        return references;
+    }
+    references.numbered = findNumberedFiles(folder);
+    references.count = references.numbered->count;
+    references.channels = colourChannelsOf(references.numbered->file(0));
+    return references;
+}
+
 struct FramePair {
     Image result;
     Image reference;
 };
 
-FramePair readPair(const fs::path& results, const fs::path& references, int index) {
+FramePair readPair(const fs::path& results, const References& references, int index) {
     const fs::path resultFile = framePath(results, "result", index);
-    const fs::path referenceFile = framePath(references, "reference", index);
-    FramePair pair{readExr(resultFile, kRgb), readExr(referenceFile, kRgb)};
+    const fs::path referenceFile = references.file(index);
+    FramePair pair{readExr(resultFile, kRgb), readExr(referenceFile, references.channels)};
     requireSameSize(referenceFile, pair.reference, resultFile, pair.result);
     return pair;
 }
@@ -260,9 +295,9 @@ int runCompare(const CompareOptions& options) {
     requireFolder(options.results, "RESULT_DIR");
     requireFolder(options.references, "REFERENCE_DIR");
     // Both sets counted (each numbered 0..N-1) and matched up front, before minutes of 4K reading.
-    const std::vector<int> compared =
-        comparedFrames(options, countFrames(options.results, "result"),
-                       countFrames(options.references, "reference"));
+    const int resultCount = countFrames(options.results, "result");
+    const References references = findReferences(options.references);
+    const std::vector<int> compared = comparedFrames(options, resultCount, references.count);
     const int frameCount = static_cast<int>(compared.size());
     std::error_code ec;
 
@@ -271,7 +306,7 @@ int runCompare(const CompareOptions& options) {
     std::optional<fs::path> input;
     if (sheets) {
         chosen = sheetFrames(options, compared);
-        input = inputFolder(options, chosen);
+        if (!references.numbered || !options.input.empty()) input = inputFolder(options, chosen);
         fs::create_directories(options.images, ec);
         if (!fs::is_directory(options.images))
             throw Error(ErrorCode::IoFailure,
@@ -290,8 +325,8 @@ int runCompare(const CompareOptions& options) {
 
     // Frame i+1 is read on another thread while frame i is compared.
     const auto readAsync = [&](int i) {
-        return std::async(std::launch::async, [&options, i] {
-            return readPair(options.results, options.references, i);
+        return std::async(std::launch::async, [&options, &references, i] {
+            return readPair(options.results, references, i);
         });
     };
     std::future<FramePair> next = readAsync(compared[0]);
@@ -357,10 +392,14 @@ Command addCompareCommand(CLI::App& app) {
     CLI::App* c = app.add_subcommand(
         "compare",
         "Quality metrics of RESULT_DIR/result_<i>.exr against "
-        "REFERENCE_DIR/reference_<i>.exr: MSE, relMSE (linear), PSNR, SSIM, temporal "
+        "REFERENCE_DIR/reference_<i>.exr (or its numbered EXRs 0001.exr, ... as Blender writes "
+        "them: result_0 against the first): MSE, relMSE (linear), PSNR, SSIM, temporal "
         "error (tone-mapped), per frame and mean");
     c->add_option("RESULT_DIR", options->results, "Folder of result_<i>.exr")->required();
-    c->add_option("REFERENCE_DIR", options->references, "Folder of reference_<i>.exr")->required();
+    c->add_option("REFERENCE_DIR", options->references,
+                  "Folder of reference_<i>.exr, or of numbered EXRs (0001.exr, ...: R, G, B or a "
+                  "multilayer file's Combined pass)")
+        ->required();
     c->add_option("--json", options->json,
                   "Also write the metrics as JSON: {\"frames\": [...], \"mean\": {...}}, "
                   "infinite PSNR as null");

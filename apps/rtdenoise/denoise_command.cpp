@@ -1,5 +1,6 @@
-// `rtdenoise denoise INPUT_DIR -o OUT_DIR`: reads the sequence (the next frame is read while the
-// current one is filtered), denoises it, writes result_<i>.exr (+ PNG, debug images, MP4).
+// `rtdenoise denoise INPUT -o OUT_DIR`: reads the sequence (a course folder or Blender's
+// multilayer EXRs; the next frame is read while the current one is filtered), denoises it,
+// writes result_<i>.exr (+ PNG, debug images, MP4).
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -26,6 +27,7 @@ namespace {
 
 struct DenoiseOptions {
     fs::path input;
+    std::string viewLayer;
     fs::path output;
     bool png = false;
     bool debug = false;
@@ -155,26 +157,33 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
             ErrorCode::InvalidArgument,
             fmt::format("--exposure must be a finite number > 0, got {}", options.exposure));
     if (!options.video.empty()) checkVideoPath(options);
-    Sequence sequence(options.input);
-    int frames = sequence.frameCount();
+    const std::unique_ptr<FrameSource> source =
+        openFrameSource(options.input, FrameSourceOptions{options.viewLayer});
+    const bool history = settings.method == Method::Temporal || settings.method == Method::Svgf;
+    if (history && !source->backProjectionProblem().empty())
+        throw Error(ErrorCode::InvalidInput,
+                    fmt::format("{} (--method {} reprojects the previous frame)",
+                                source->backProjectionProblem(), toString(settings.method)));
+    int frames = source->frameCount();
     if (options.maxFrames > 0) frames = std::min(frames, options.maxFrames);
-    const std::vector<ExrSize> sizes = sequence.checkFrames(frames);
+    const std::vector<ExrSize> sizes = source->checkFrames(frames);
     for (int i = 1; i < frames && !options.video.empty(); ++i)
         if (sizes[i].width != sizes[0].width || sizes[i].height != sizes[0].height)
-            throw Error(
-                ErrorCode::InvalidInput,
-                fmt::format("{}: {}x{}, but frame 0 is {}x{}: a --video needs frames of "
-                            "one size",
-                            (options.input / fmt::format("beauty_{}.exr", i)).string(),
-                            sizes[i].width, sizes[i].height, sizes[0].width, sizes[0].height));
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("{}: {}x{}, but frame 0 is {}x{}: a --video needs frames of "
+                                    "one size",
+                                    source->frameFile(i).string(), sizes[i].width, sizes[i].height,
+                                    sizes[0].width, sizes[0].height));
     checkOutputFolder(options.output);
     Denoiser denoiser(settings);  // a device that is not there fails here, before any output
 
     prepareOutputFolder(options.output);
     removeEarlierOutputs(options, settings, frames);
+    for (const std::string& warning : source->warnings())  // once per run, not per frame
+        fmt::print(stderr, "rtdenoise: warning: {}\n", warning);
     if (!options.quiet) {
         fmt::print(stderr, "rtdenoise: {} frames from {}, method {}, device {}\n", frames,
-                   options.input.string(), toString(settings.method), denoiser.deviceName());
+                   source->describe(), toString(settings.method), denoiser.deviceName());
     }
     std::optional<VideoWriter> video;
     Progress progress(frames, options.quiet);
@@ -187,7 +196,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
 
     // Frame i+1 is read on another thread while frame i is denoised.
     auto readAsync = [&](int i) {
-        return std::async(std::launch::async, [&sequence, i] { return sequence.readFrame(i); });
+        return std::async(std::launch::async, [&source, i] { return source->readFrame(i); });
     };
     std::future<Frame> next = readAsync(0);
     // Frame i's files are written on another thread while frame i+1 is denoised; two result
@@ -414,14 +423,22 @@ Command addDenoiseCommand(CLI::App& app) {
     auto settings = std::make_shared<DenoiserSettings>();
     CLI::App* c =
         app.add_subcommand("denoise",
-                           "Denoise a sequence folder (beauty_i.exr, normal_i.exr, position_i.exr, "
-                           "depth_i.exr, ID_i.exr, matrix_i.mat) into OUT_DIR/result_<i>.exr");
+                           "Denoise a sequence (a folder of beauty_i.exr, normal_i.exr, "
+                           "position_i.exr, depth_i.exr, ID_i.exr, matrix_i.mat, or Blender's "
+                           "multilayer EXRs) into OUT_DIR/result_<i>.exr");
     c->add_option(
         "--config", options->config,
         "Read options from a TOML/INI file: one `key = value` per line, keys are the long "
         "option names (e.g. method = \"jbf\", sigma-color = 0.8); flags given on the "
         "command line win");
-    c->add_option("INPUT_DIR", options->input, "Folder of the input sequence")->required();
+    c->add_option("INPUT", options->input,
+                  "The input sequence: a course-layout folder, a folder of Blender multilayer "
+                  "EXRs (0001.exr, ...; result_0 is the first), or a pattern naming them "
+                  "(renders/frame_####.exr, renders/frame_%04d.exr)")
+        ->required();
+    c->add_option("--view-layer", options->viewLayer,
+                  "Blender input: the view layer to read (default: the first with a colour pass "
+                  "and Depth)");
     c->add_option("-o,--output", options->output, "Output folder (created if missing)")->required();
     addDenoiserOptions(*c, *settings);
     c->add_flag("--png", options->png, "Also write result_<i>.png (ACES, sRGB)");

@@ -69,8 +69,10 @@ int runRender(const RenderOptions& options) {
             "{:.2f} Mpaths/s (files included)\n",
             s.frames, s.width, s.height, seconds, seconds / s.frames, paths * 1e-6,
             seconds > 0.0 ? paths * 1e-6 / seconds : 0.0);
-        fmt::print("output: {}{}\n", options.output.string(),
-                   s.gbufferOnly ? "" : " (reference in reference/)");
+        fmt::print(
+            "output: {}{}{}\n", options.output.string(),
+            s.format == render::OutputFormat::Multilayer ? " (multilayer 0001.exr, ...)" : "",
+            s.gbufferOnly ? "" : " (reference in reference/)");
     }
     return 0;
 }
@@ -109,6 +111,17 @@ Command addRenderCommand(CLI::App& app) {
         ->capture_default_str();
     c->add_flag("--gbuffer-only", s.gbufferOnly,
                 "Skip the reference: noisy beauty and G-buffers only");
+    c->add_option_function<std::string>(
+         "--format",
+         [&s](const std::string& value) {
+             s.format = value == "multilayer" ? render::OutputFormat::Multilayer
+                                              : render::OutputFormat::Folder;
+         },
+         "folder: the course layout (beauty_i.exr, ..., matrix_i.mat, reference/reference_i.exr); "
+         "multilayer: one Blender-style multilayer EXR a frame (0001.exr, ...: Combined, Depth, "
+         "Normal, Position, IndexOB, Denoising Albedo, Vector) and reference/0001.exr, ...")
+        ->check(CLI::IsMember({"folder", "multilayer"}))
+        ->option_text("folder|multilayer (default folder)");
     c->add_flag("-q,--quiet", options->quiet, "No progress or summary");
     return {c, [options] { return runRender(*options); }};
 }

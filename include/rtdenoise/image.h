@@ -49,7 +49,8 @@ struct Matrix4 {
 // with matrices (no motion vectors) a ray distance is turned into view depth from the position.
 enum class DepthKind {
     ViewZ,        // distance from the camera plane (w after projection)
-    RayDistance,  // distance from the camera along the pixel's ray (Cycles' Depth pass)
+    RayDistance,  // distance from the camera along the pixel's ray (Cycles' Depth is ViewZ:
+                  // measured on Blender 3.4, docs/inputs.md)
 };
 
 // One frame of a path-traced sequence with its G-buffer (layout: shared/data/README.md).

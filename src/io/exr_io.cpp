@@ -12,6 +12,7 @@
 #include <ImfTileDescription.h>
 #include <ImfVersion.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <exception>
@@ -20,6 +21,7 @@
 #include <optional>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "io/atomic_file.h"
@@ -296,9 +298,9 @@ void checkClaimedSize(const std::filesystem::path& file) {
 
 // The file channel chosen for each entry of `channelChoices` (first match wins); throws
 // InvalidInput naming the file for a missing or subsampled channel.
-std::vector<std::string> chooseChannels(
-    const std::filesystem::path& file, const Imf::ChannelList& channels,
-    const std::vector<std::vector<std::string>>& channelChoices) {
+std::vector<std::string> chooseChannels(const std::filesystem::path& file,
+                                        const Imf::ChannelList& channels,
+                                        const ChannelChoices& channelChoices) {
     std::vector<std::string> chosen;
     for (const auto& choices : channelChoices) {
         const std::string* found = nullptr;
@@ -325,18 +327,19 @@ std::vector<std::string> chooseChannels(
 
 // The checks before opening: channels asked for, the file there and a regular file.
 void requireReadableFile(const std::filesystem::path& file,
-                         const std::vector<std::vector<std::string>>& channelChoices) {
-    if (channelChoices.empty()) {
+                         const std::vector<ChannelChoices>& images) {
+    for (const ChannelChoices& choices : images)
+        if (choices.empty())
+            throw Error(ErrorCode::InvalidArgument, file.string() + ": no channels requested");
+    if (images.empty())
         throw Error(ErrorCode::InvalidArgument, file.string() + ": no channels requested");
-    }
     io_detail::requireRegularFile(file, "an EXR file");
 }
 
 }  // namespace
 
-ExrSize readExrSize(const std::filesystem::path& file,
-                    const std::vector<std::vector<std::string>>& channelChoices) {
-    requireReadableFile(file, channelChoices);
+ExrSize readExrSize(const std::filesystem::path& file, const ChannelChoices& channelChoices) {
+    requireReadableFile(file, {channelChoices});
     checkClaimedSize(file);
     try {
         Imf::InputFile input(file.c_str(), 0);
@@ -349,13 +352,34 @@ ExrSize readExrSize(const std::filesystem::path& file,
     }
 }
 
+ExrContents readExrContents(const std::filesystem::path& file) {
+    io_detail::requireRegularFile(file, "an EXR file");
+    checkClaimedSize(file);
+    try {
+        Imf::InputFile input(file.c_str(), 0);
+        ExrContents contents{checkedSize(file, input.header()), {}};
+        const Imf::ChannelList& channels = input.header().channels();
+        for (auto it = channels.begin(); it != channels.end(); ++it)
+            contents.channels.emplace_back(it.name());
+        return contents;
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw Error(ErrorCode::IoFailure, file.string() + ": " + e.what());
+    }
+}
+
 void setExrThreads(int count) {
     Imf::setGlobalThreadCount(count < 0 ? 0 : count);
 }
 
-Image readExr(const std::filesystem::path& file,
-              const std::vector<std::vector<std::string>>& channelChoices) {
-    requireReadableFile(file, channelChoices);
+Image readExr(const std::filesystem::path& file, const ChannelChoices& channelChoices) {
+    return std::move(readExrImages(file, {channelChoices}).front());
+}
+
+std::vector<Image> readExrImages(const std::filesystem::path& file,
+                                 const std::vector<ChannelChoices>& images) {
+    requireReadableFile(file, images);
     checkClaimedSize(file);
     try {
         Imf::InputFile input(file.c_str(), Imf::globalThreadCount());
@@ -363,40 +387,54 @@ Image readExr(const std::filesystem::path& file,
 
         // Resolve every output channel to a file channel, and check the size, before reading
         // or allocating anything.
-        const std::vector<std::string> chosen =
-            chooseChannels(file, header.channels(), channelChoices);
+        std::vector<std::vector<std::string>> chosen;
+        for (const ChannelChoices& choices : images)
+            chosen.push_back(chooseChannels(file, header.channels(), choices));
         const Imath::Box2i window = header.dataWindow();
         const auto [width, height] = checkedSize(file, header);
-        const int channelCount = static_cast<int>(chosen.size());
-        Image image(width, height, channelCount);
+        std::vector<Image> result;
+        for (const auto& channels : chosen)
+            result.emplace_back(width, height, static_cast<int>(channels.size()));
 
         // A FrameBuffer holds one slice per name, so an output channel that repeats an earlier
-        // one is copied after the read instead.
-        const std::size_t xStride = sizeof(float) * channelCount;
-        const std::size_t yStride = xStride * width;
+        // one (in any image) is copied after the read instead.
+        struct Target {
+            std::size_t image;
+            int channel;
+        };
+        std::vector<std::pair<Target, Target>> copies;  // (to, from)
+        std::vector<std::pair<std::string, Target>> read;
         Imf::FrameBuffer frameBuffer;
-        std::vector<int> copyOf(chosen.size(), -1);
-        for (int c = 0; c < channelCount; ++c) {
-            for (int earlier = 0; earlier < c; ++earlier) {
-                if (chosen[earlier] == chosen[c]) {
-                    copyOf[c] = earlier;
-                    break;
+        for (std::size_t k = 0; k < chosen.size(); ++k) {
+            const int channelCount = result[k].channels;
+            const std::size_t xStride = sizeof(float) * channelCount;
+            const std::size_t yStride = xStride * width;
+            for (int c = 0; c < channelCount; ++c) {
+                const Target target{k, c};
+                const auto earlier = std::find_if(read.begin(), read.end(), [&](const auto& entry) {
+                    return entry.first == chosen[k][c];
+                });
+                if (earlier != read.end()) {
+                    copies.emplace_back(target, earlier->second);
+                    continue;
                 }
+                read.emplace_back(chosen[k][c], target);
+                frameBuffer.insert(chosen[k][c],
+                                   Imf::Slice::Make(Imf::FLOAT, result[k].pixels.data() + c, window,
+                                                    xStride, yStride));
             }
-            if (copyOf[c] >= 0) continue;
-            frameBuffer.insert(chosen[c], Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c,
-                                                           window, xStride, yStride));
         }
         input.setFrameBuffer(frameBuffer);
         input.readPixels(window.min.y, window.max.y);
 
-        for (int c = 0; c < channelCount; ++c) {
-            if (copyOf[c] < 0) continue;
-            for (std::size_t i = 0; i < image.pixelCount(); ++i) {
-                image.pixels[i * channelCount + c] = image.pixels[i * channelCount + copyOf[c]];
-            }
+        for (const auto& [to, from] : copies) {
+            Image& target = result[to.image];
+            const Image& source = result[from.image];
+            for (std::size_t i = 0; i < target.pixelCount(); ++i)
+                target.pixels[i * target.channels + to.channel] =
+                    source.pixels[i * source.channels + from.channel];
         }
-        return image;
+        return result;
     } catch (const Error&) {
         throw;
     } catch (const std::exception& e) {
@@ -411,38 +449,58 @@ void writeExr(const std::filesystem::path& file, const Image& image) {
                     file.string() + ": writeExr needs a 1- or 3-channel image, got " +
                         std::to_string(image.channels) + " channels");
     }
-    if (image.width <= 0 || image.height <= 0 ||
-        image.pixels.size() != image.pixelCount() * image.channels) {
-        throw Error(ErrorCode::InvalidArgument,
-                    file.string() + ": writeExr got an empty or inconsistent image (" +
-                        std::to_string(image.width) + "x" + std::to_string(image.height) + ")");
+    writeExrChannels(file, {{&image,
+                             image.channels == 3 ? std::vector<std::string>{"R", "G", "B"}
+                                                 : std::vector<std::string>{"Y"},
+                             false}});
+}
+
+void writeExrChannels(const std::filesystem::path& file,
+                      const std::vector<ExrChannelGroup>& groups) {
+    if (groups.empty() || !groups.front().image)
+        throw Error(ErrorCode::InvalidArgument, file.string() + ": no channels to write");
+    const int width = groups.front().image->width, height = groups.front().image->height;
+    for (const ExrChannelGroup& group : groups) {
+        const Image* image = group.image;
+        if (!image || image->width <= 0 || image->height <= 0 || image->channels <= 0 ||
+            image->pixels.size() != image->pixelCount() * image->channels ||
+            image->width != width || image->height != height ||
+            group.names.size() != std::size_t(image->channels)) {
+            throw Error(
+                ErrorCode::InvalidArgument,
+                file.string() + ": an empty or inconsistent image to write (" +
+                    (image ? std::to_string(image->width) + "x" + std::to_string(image->height)
+                           : std::string("none")) +
+                    ")");
+        }
     }
     io_detail::requireParentFolder(file);
     io_detail::TemporaryFile temporary(io_detail::temporaryPathFor(file));
     try {
-        static const char* const rgb[] = {"R", "G", "B"};
-        static const char* const gray[] = {"Y"};
-        const char* const* names = image.channels == 3 ? rgb : gray;
-
-        Imf::Header header(image.width, image.height, 1.0f, Imath::V2f(0, 0), 1.0f,
-                           Imf::INCREASING_Y, Imf::ZIP_COMPRESSION);
-        for (int c = 0; c < image.channels; ++c) {
-            header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
-        }
-        const std::size_t xStride = sizeof(float) * image.channels;
-        const std::size_t yStride = xStride * image.width;
+        Imf::Header header(width, height, 1.0f, Imath::V2f(0, 0), 1.0f, Imf::INCREASING_Y,
+                           Imf::ZIP_COMPRESSION);
+        // The slices stay FLOAT: OpenEXR converts them to a HALF file channel itself.
         Imf::FrameBuffer frameBuffer;
-        for (int c = 0; c < image.channels; ++c) {
-            // OpenEXR's Slice takes a mutable pointer but only reads from it when writing.
-            frameBuffer.insert(names[c], Imf::Slice(Imf::FLOAT,
-                                                    const_cast<char*>(reinterpret_cast<const char*>(
-                                                        image.pixels.data() + c)),
-                                                    xStride, yStride));
+        for (const ExrChannelGroup& group : groups) {
+            const Image& image = *group.image;
+            const std::size_t xStride = sizeof(float) * image.channels;
+            const std::size_t yStride = xStride * image.width;
+            for (int c = 0; c < image.channels; ++c) {
+                header.channels().insert(group.names[c],
+                                         Imf::Channel(group.half ? Imf::HALF : Imf::FLOAT));
+                // OpenEXR's Slice takes a mutable pointer but only reads from it when writing.
+                frameBuffer.insert(
+                    group.names[c],
+                    Imf::Slice(
+                        Imf::FLOAT,
+                        const_cast<char*>(reinterpret_cast<const char*>(image.pixels.data() + c)),
+                        xStride, yStride));
+            }
         }
         {
             Imf::OutputFile output(temporary.path().c_str(), header, Imf::globalThreadCount());
             output.setFrameBuffer(frameBuffer);
-            output.writePixels(image.height);
+            output.writePixels(height);
         }  // the destructor finishes the file before the rename
     } catch (const std::exception& e) {
         throw Error(ErrorCode::IoFailure, file.string() + ": cannot write: " + e.what());

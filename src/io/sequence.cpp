@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "io/numbering.h"
 #include "rtdenoise/error.h"
 #include "rtdenoise/io.h"
 
@@ -26,26 +27,6 @@ const std::vector<std::vector<std::string>> kId = {{"Y", "R", "ID.Y", "id.Y"}};
 
 // IDs are stored as floats; anything further than this from an integer is a broken file.
 constexpr float kIdTolerance = 1e-3f;
-
-// "0..6 and 8..19" for sorted, distinct indices.
-std::string describeRanges(const std::vector<int>& sorted) {
-    std::vector<std::string> ranges;
-    for (std::size_t i = 0; i < sorted.size();) {
-        std::size_t j = i;
-        while (j + 1 < sorted.size() && sorted[j + 1] == sorted[j] + 1) ++j;
-        ranges.push_back(i == j ? std::to_string(sorted[i])
-                                : std::to_string(sorted[i]) + ".." + std::to_string(sorted[j]));
-        i = j + 1;
-    }
-    constexpr std::size_t kShown = 8;
-    std::string out;
-    for (std::size_t i = 0; i < ranges.size() && i < kShown; ++i) {
-        if (i > 0) out += (i + 1 == ranges.size()) ? " and " : ", ";
-        out += ranges[i];
-    }
-    if (ranges.size() > kShown) out += ", ...";
-    return out;
-}
 
 std::string sizeText(const Image& image) {
     return std::to_string(image.width) + "x" + std::to_string(image.height);
@@ -66,9 +47,9 @@ bool hasEntry(const std::filesystem::path& file) {
     return std::filesystem::exists(std::filesystem::symlink_status(file, ec));
 }
 
-// Only regular files, or links to them, are frames; anything else of a frame's name is an error
-// naming it, not a frame whose other files then seem to be missing.
-void requireFrameFile(const std::filesystem::directory_entry& entry) {
+}  // namespace
+
+void io_detail::requireFrameFile(const std::filesystem::directory_entry& entry) {
     std::error_code ec;
     const std::filesystem::file_status status = entry.status(ec);
     if (std::filesystem::is_regular_file(status)) return;
@@ -80,7 +61,24 @@ void requireFrameFile(const std::filesystem::directory_entry& entry) {
                                                               : ": not a regular file"));
 }
 
-}  // namespace
+std::string io_detail::describeRanges(const std::vector<int>& sorted) {
+    std::vector<std::string> ranges;
+    for (std::size_t i = 0; i < sorted.size();) {
+        std::size_t j = i;
+        while (j + 1 < sorted.size() && sorted[j + 1] == sorted[j] + 1) ++j;
+        ranges.push_back(i == j ? std::to_string(sorted[i])
+                                : std::to_string(sorted[i]) + ".." + std::to_string(sorted[j]));
+        i = j + 1;
+    }
+    constexpr std::size_t kShown = 8;
+    std::string out;
+    for (std::size_t i = 0; i < ranges.size() && i < kShown; ++i) {
+        if (i > 0) out += (i + 1 == ranges.size()) ? " and " : ", ";
+        out += ranges[i];
+    }
+    if (ranges.size() > kShown) out += ", ...";
+    return out;
+}
 
 int frameIndexOf(const std::string& name, std::string_view stem, std::string_view extension) {
     if (name.size() <= stem.size() + 1 + extension.size() || !name.starts_with(stem) ||
@@ -111,7 +109,7 @@ int countFrames(const std::filesystem::path& folder, std::string_view stem,
     for (; !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
         const int index = frameIndexOf(it->path().filename().string(), stem, extension);
         if (index < 0) continue;
-        requireFrameFile(*it);
+        io_detail::requireFrameFile(*it);
         indices.push_back(index);
     }
     if (ec) throw Error(ErrorCode::IoFailure, folder.string() + ": cannot list: " + ec.message());
@@ -130,7 +128,7 @@ int countFrames(const std::filesystem::path& folder, std::string_view stem,
             ErrorCode::InvalidInput,
             fmt::format("{} is missing: frames {} exist",
                         (folder / fmt::format("{}_{}{}", stem, missing, extension)).string(),
-                        describeRanges(indices)));
+                        io_detail::describeRanges(indices)));
     }
     return count;
 }
@@ -213,6 +211,14 @@ Frame Sequence::readFrame(int index) const {
     const std::filesystem::path albedoFile = path("albedo", ".exr");
     if (hasEntry(albedoFile)) frame.albedo = readChecked(albedoFile, kRgb);
     return frame;
+}
+
+std::string Sequence::describe() const {
+    return fmt::format("{} (course layout, frames 0..{})", folder_.string(), frameCount_ - 1);
+}
+
+std::filesystem::path Sequence::frameFile(int index) const {
+    return folder_ / fmt::format("beauty_{}.exr", index);
 }
 
 std::vector<ExrSize> Sequence::checkFrames(int count) const {

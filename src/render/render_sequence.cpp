@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <charconv>
+#include <cmath>
+#include <optional>
 #include <string_view>
 #include <system_error>
 
@@ -100,12 +103,14 @@ std::string sceneJson(const SceneDefinition& d, const RenderSettings& s,
         "  \"reference\": {},\n"
         "  \"seed\": {},\n"
         "  \"max_depth\": {},\n"
+        "  \"format\": {},\n"
         "  \"motion\": {},\n"
         "  \"moving\": {{\"objects\": {}, \"camera\": {}, \"lights\": {}}},\n"
         "  \"objects\": [\n{}\n  ]\n"
         "}}\n",
         jsonString(d.name), jsonString(d.description), s.width, s.height, s.frames, s.spp,
         s.gbufferOnly ? 0 : s.referenceSpp, !s.gbufferOnly, s.seed, s.maxDepth,
+        jsonString(s.format == OutputFormat::Multilayer ? "multilayer" : "folder"),
         jsonString(d.motion), jsonList(movingObjects), motion.camera, jsonList(changingLights),
         objects);
 }
@@ -117,6 +122,87 @@ void removeStaleFrames(const fs::path& folder, int frames) {
                                               "depth",  "ID",     "reference"};
     for (std::string_view stem : kStems) removeNumberedFiles(folder, stem, ".exr", frames);
     removeNumberedFiles(folder, "matrix", ".mat", frames);
+}
+
+// The multilayer layout's name of frame i: Blender's default, frame numbers from 1, 4 digits.
+std::string multilayerName(int index) {
+    return fmt::format("{:04d}.exr", index + 1);
+}
+
+// Multilayer frames "<n>.exr" (as multilayerName writes them) of index >= frames: the same
+// reason as removeStaleFrames, for the other layout.
+void removeStaleMultilayerFrames(const fs::path& folder, int frames) {
+    std::error_code ec;
+    std::vector<fs::path> stale;
+    for (fs::directory_iterator it(folder, ec); !ec && it != fs::directory_iterator();
+         it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (!name.ends_with(".exr") || name.size() < 8) continue;
+        const std::string_view digits(name.data(), name.size() - 4);
+        int number = 0;
+        const auto [end, error] =
+            std::from_chars(digits.data(), digits.data() + digits.size(), number);
+        std::error_code typeError;
+        if (error == std::errc() && end == digits.data() + digits.size() && number >= 1 &&
+            multilayerName(number - 1) == name && number - 1 >= frames &&
+            it->is_regular_file(typeError))
+            stale.push_back(it->path());
+    }
+    for (const fs::path& file : stale) {
+        fs::remove(file, ec);
+        if (ec)
+            throw Error(ErrorCode::IoFailure, file.string() +
+                                                  ": cannot remove this output of an earlier "
+                                                  "run: " +
+                                                  ec.message());
+    }
+}
+
+// Double precision for the motion vectors: they are the reference the reader's are tested
+// against, to a thousandth of a pixel.
+using Matrix4d = std::array<std::array<double, 4>, 4>;
+
+Matrix4d toDouble(const Matrix4& m) {
+    Matrix4d r{};
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) r[i][j] = m.m[i][j];
+    return r;
+}
+
+Matrix4d multiply(const Matrix4d& a, const Matrix4d& b) {
+    Matrix4d r{};
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            for (int k = 0; k < 4; ++k) r[i][j] += a[i][k] * b[k][j];
+    return r;
+}
+
+// Gauss-Jordan with partial pivoting; a singular matrix (a zero scale) gives nullopt.
+std::optional<Matrix4d> inverse(Matrix4d a) {
+    Matrix4d r{};
+    for (int i = 0; i < 4; ++i) r[i][i] = 1.0;
+    for (int col = 0; col < 4; ++col) {
+        int pivot = col;
+        for (int row = col + 1; row < 4; ++row)
+            if (std::abs(a[row][col]) > std::abs(a[pivot][col])) pivot = row;
+        if (std::abs(a[pivot][col]) < 1e-12) return std::nullopt;
+        std::swap(a[col], a[pivot]);
+        std::swap(r[col], r[pivot]);
+        const double scale = 1.0 / a[col][col];
+        for (int j = 0; j < 4; ++j) {
+            a[col][j] *= scale;
+            r[col][j] *= scale;
+        }
+        for (int row = 0; row < 4; ++row) {
+            if (row == col) continue;
+            const double factor = a[row][col];
+            for (int j = 0; j < 4; ++j) {
+                a[row][j] -= factor * a[col][j];
+                r[row][j] -= factor * r[col][j];
+            }
+        }
+    }
+    return r;
 }
 
 }  // namespace
@@ -142,6 +228,49 @@ void validate(const RenderSettings& s) {
     check(s.maxDepth >= 1 && s.maxDepth <= 64, "max depth", s.maxDepth, "1..64");
 }
 
+Image screenMotion(const Frame& frame, const Scene& current, const Scene& other) {
+    const int width = frame.width(), height = frame.height();
+    // Off-screen by far, so that history there is rejected as outside the screen.
+    constexpr float kBehindCamera = 1e6f;
+    const Matrix4d currentToScreen = toDouble(worldToScreen(current.camera, width, height));
+    const Matrix4d otherToScreen = toDouble(worldToScreen(other.camera, width, height));
+    std::vector<std::optional<Matrix4d>> currentToOther;  // per object: world now -> screen there
+    for (std::size_t k = 0; k < current.objects.size() && k < other.objects.size(); ++k) {
+        const std::optional<Matrix4d> toLocal = inverse(toDouble(current.objects[k].objectToWorld));
+        currentToOther.push_back(
+            toLocal
+                ? std::optional<Matrix4d>(multiply(
+                      otherToScreen, multiply(toDouble(other.objects[k].objectToWorld), *toLocal)))
+                : std::nullopt);
+    }
+    Image motion(width, height, 2);
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const std::size_t i = std::size_t(y) * width + x;
+            const int id = frame.objectId[i];
+            if (id < 0) continue;
+            const double p[4] = {frame.position.pixels[i * 3], frame.position.pixels[i * 3 + 1],
+                                 frame.position.pixels[i * 3 + 2], 1.0};
+            const auto project = [&p](const Matrix4d& m, double& sx, double& sy) {
+                double s[4] = {};
+                for (int r = 0; r < 4; ++r)
+                    for (int c = 0; c < 4; ++c) s[r] += m[r][c] * p[c];
+                if (!(s[3] > 1e-9)) return false;
+                sx = s[0] / s[3];
+                sy = s[1] / s[3];
+                return true;
+            };
+            double cx = 0, cy = 0, ox = 0, oy = 0;
+            const bool known = std::size_t(id) < currentToOther.size() && currentToOther[id] &&
+                               project(currentToScreen, cx, cy) &&
+                               project(*currentToOther[id], ox, oy);
+            motion.at(x, y, 0) = known ? float(ox - cx) : kBehindCamera;
+            motion.at(x, y, 1) = known ? float(oy - cy) : kBehindCamera;
+        }
+    }
+    return motion;
+}
+
 double pathCount(const RenderSettings& s) {
     return double(s.width) * s.height * s.frames * (s.spp + (s.gbufferOnly ? 0 : s.referenceSpp));
 }
@@ -165,9 +294,19 @@ void renderSequence(const std::string& sceneName, const RenderSettings& settings
     prepareOutputFolder(outDir);
     const fs::path referenceDir = outDir / "reference";
     if (!settings.gbufferOnly) prepareOutputFolder(referenceDir);
-    removeStaleFrames(outDir, settings.frames);
-    if (fs::is_directory(referenceDir))
-        removeStaleFrames(referenceDir, settings.gbufferOnly ? 0 : settings.frames);
+    // A folder holds one render: the other layout's frames go, so it is read as this one.
+    const bool multilayer = settings.format == OutputFormat::Multilayer;
+    const int kept = settings.gbufferOnly ? 0 : settings.frames;
+    removeStaleFrames(outDir, multilayer ? 0 : settings.frames);
+    removeStaleMultilayerFrames(outDir, multilayer ? settings.frames : 0);
+    if (fs::is_directory(referenceDir)) {
+        removeStaleFrames(referenceDir, multilayer ? 0 : kept);
+        removeStaleMultilayerFrames(referenceDir, multilayer ? kept : 0);
+    }
+    // The scenes before the first frame and after the last: Cycles' Vector pass also points
+    // there (scenes are functions of any frame index, negative ones included).
+    const Scene beforeFirst = definition->build(-1);
+    const Scene afterLast = definition->build(settings.frames);
 
     for (int i = 0; i < settings.frames; ++i) {
         TraceSettings trace;
@@ -178,11 +317,21 @@ void renderSequence(const std::string& sceneName, const RenderSettings& settings
         trace.seed = settings.seed;
         trace.frameIndex = i;
         trace.stream = kBeautyStream;
-        writeFrame(outDir, i, renderFrame(scenes[i], trace));
+        Frame frame = renderFrame(scenes[i], trace);
+        if (multilayer) {
+            const Scene& previous = i > 0 ? scenes[i - 1] : beforeFirst;
+            const Scene& next = i + 1 < settings.frames ? scenes[i + 1] : afterLast;
+            frame.motion = screenMotion(frame, scenes[i], previous);
+            const Image motionToNext = screenMotion(frame, scenes[i], next);
+            writeBlenderExr(outDir / multilayerName(i), frame, &motionToNext);
+        } else {
+            writeFrame(outDir, i, frame);
+        }
         if (!settings.gbufferOnly) {
             trace.samplesPerPixel = settings.referenceSpp;
             trace.stream = kReferenceStream;
-            writeExr(referenceDir / fmt::format("reference_{}.exr", i),
+            writeExr(referenceDir /
+                         (multilayer ? multilayerName(i) : fmt::format("reference_{}.exr", i)),
                      renderRadiance(scenes[i], trace));
         }
         if (progress) progress(i + 1, settings.frames);

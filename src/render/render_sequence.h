@@ -8,7 +8,16 @@
 #include <string>
 #include <vector>
 
+#include "render/scene.h"
+#include "rtdenoise/image.h"
+
 namespace rtd::render {
+
+// How renderSequence lays out its files.
+enum class OutputFormat {
+    Folder,      // the course layout: beauty_i.exr, ..., matrix_i.mat, reference/reference_i.exr
+    Multilayer,  // Blender's: one multilayer EXR a frame, 0001.exr ..., reference/0001.exr ...
+};
 
 struct RenderSettings {
     int width = 320;
@@ -19,6 +28,7 @@ struct RenderSettings {
     std::uint32_t seed = 1;
     int maxDepth = 8;          // surface interactions per path
     bool gbufferOnly = false;  // beauty and G-buffers only: no reference
+    OutputFormat format = OutputFormat::Folder;
 };
 
 struct SceneInfo {
@@ -28,14 +38,24 @@ std::vector<SceneInfo> listScenes();
 
 // Writes, for i = 0..frames-1, beauty_i.exr, albedo_i.exr, normal_i.exr, position_i.exr,
 // depth_i.exr, ID_i.exr, matrix_i.mat and (unless gbufferOnly) reference/reference_i.exr, plus
-// scene.json describing the render (written last). Files of the layout numbered >= frames, left
-// by an earlier longer render, are removed so that they cannot join the sequence; so is an old
-// reference with gbufferOnly. `progress(done, total)` is called after each frame. Throws
+// scene.json describing the render (written last). With OutputFormat::Multilayer, frame i is
+// instead the Blender-style multilayer <i+1>.exr (0001.exr ..., writeBlenderExr: motion vectors
+// from the matrices of frames i-1 and i+1) and its reference reference/<i+1>.exr (R, G, B).
+// Files of the layout numbered >= frames, left by an earlier longer render, are removed so that
+// they cannot join the sequence, and so are the other layout's frames; so is an old reference
+// with gbufferOnly. `progress(done, total)` is called after each frame. Throws
 // rtd::Error for an unknown scene (listing the scenes), a bad setting (naming it) or an
 // unwritable folder.
 void renderSequence(const std::string& scene, const RenderSettings& settings,
                     const std::filesystem::path& outDir,
                     const std::function<void(int done, int total)>& progress = {});
+
+// The motion of each pixel of `frame` (rendered from `current`) to where its point is in
+// `other`, from the scenes' own matrices: other's worldToScreen * other's objectToWorld[id] *
+// inverse(current's objectToWorld[id]) * position, minus the pixel's own projection. 2 channels,
+// pixels, y down (rtd::Frame::motion's convention when `other` is the previous frame); 0 on
+// background; far off-screen where the point is behind other's camera.
+Image screenMotion(const Frame& frame, const Scene& current, const Scene& other);
 
 // Camera paths a render traces (beauty and reference, G-buffer rays not counted): for speed
 // reports.
