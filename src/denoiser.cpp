@@ -203,7 +203,9 @@ struct Denoiser::Impl {
     void bindInputs(const FrameView& f) {
         const int w = f.width, h = f.height;
         const bool useAlbedo = f.albedo && settings.albedo.demodulate;
-        const bool useMotion = f.motion && pipeline.keepsHistory();
+        // Only the methods that reproject read motion (declareIngest declares it for them).
+        const bool reprojects = images.motion.index >= 0;
+        const bool useMotion = f.motion && reprojects;
         InputLayout beauty = inputLayout("beauty", f.beauty, w, h, 3, 4, false);
         InputLayout normal = inputLayout("normal", f.normal, w, h, 3, 4, false);
         InputLayout position = inputLayout("position", f.position, w, h, 3, 4, false);
@@ -214,8 +216,7 @@ struct Denoiser::Impl {
         if (useAlbedo) albedo = inputLayout("albedo", f.albedo, w, h, 3, 4, false);
         if (useMotion) motion = inputLayout("motion", f.motion, w, h, 2, 4, false);
         // With matrices, back-projection compares view depths: a ray distance is replaced.
-        const bool viewDepth =
-            f.depthKind == DepthKind::RayDistance && !useMotion && pipeline.keepsHistory();
+        const bool viewDepth = f.depthKind == DepthKind::RayDistance && !useMotion && reprojects;
         bindInput(inBeauty, beauty, f.space, 3, false);
         bindInput(inNormal, normal, f.space, 3, false);
         bindInput(inPosition, position, f.space, 3, false);
