@@ -499,6 +499,25 @@ TEST(MultilayerRender, MotionIsTheMatricesBackProjection) {
     }
 }
 
+// Every built-in scene is a test of the Blender path: its multilayer render (motion from the
+// Vector pass, no matrices, no depth change) denoises as its folder layout (the matrices) does.
+TEST(MultilayerRender, EveryScenesMotionDenoisesAsItsMatrices) {
+    for (const render::SceneInfo& info : render::listScenes()) {
+        SCOPED_TRACE(info.name);
+        test::TempFolder dir("multilayer-denoise-" + info.name);
+        const TwoLayouts both = renderBothLayouts(dir, info.name);
+        for (Method method : {Method::Temporal, Method::Svgf}) {
+            Denoiser matrices(test::cpuSettings(method)), motion(test::cpuSettings(method));
+            for (std::size_t i = 0; i < both.folder.size(); ++i) {
+                const Image a = matrices.processFrame(both.folder[i]);
+                const Image b = motion.processFrame(both.multilayer[i]);
+                const double difference = metrics::relMse(b, a);
+                EXPECT_LT(difference, 1e-3) << toString(method) << " frame " << i;
+            }
+        }
+    }
+}
+
 TEST(MultilayerRender, CliWritesItAndCompareReadsItsReference) {
     test::TempFolder dir("multilayer-cli");
     const fs::path out = dir.path() / "scene";
