@@ -245,7 +245,7 @@ TEST(BlenderFixture, FramesHoldTheGBufferAsImageHDocumentsIt) {
         EXPECT_EQ(frame.motion->channels, 2);
         EXPECT_EQ(frame.depthKind, DepthKind::ViewZ);
         EXPECT_TRUE(frame.objectToWorld.empty());
-        // The floor, wall, sphere and cube have pass_index 0..3.
+        // The floor, the room (walls and ceiling), the sphere and the cube have pass_index 0..3.
         EXPECT_EQ(frame.objectCount, 4);
 
         const fs::path file = sequence.frameFile(index);
@@ -267,7 +267,7 @@ TEST(BlenderFixture, FramesHoldTheGBufferAsImageHDocumentsIt) {
             const float* n = &frame.normal.pixels[i * 3];
             EXPECT_NEAR(std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1.0f, 1e-3f);
         }
-        EXPECT_GT(background, 64 * 4);  // the sky above the wall
+        EXPECT_GT(background, 64 * 4);  // the sky through the window in the back wall
         EXPECT_EQ(ids, (std::set<int>{-1, 0, 1, 2, 3}));
     }
 }
@@ -330,7 +330,7 @@ TEST(BlenderFixture, MotionMatchesTheScriptsMatrices) {
         EXPECT_LT(worst, 1e-3);
         ASSERT_GT(cubePixels, 20);
         ASSERT_GT(wallPixels, 20);
-        // The cube slides right, so it came from further left than the wall behind it did.
+        // The cube slides right, so it came from further left than the walls behind it did.
         EXPECT_LT(cubeMotionX / cubePixels, wallMotionX / wallPixels - 0.5);
     }
 }
@@ -340,12 +340,13 @@ TEST(BlenderFixture, RelMseHelperScoresTheNoisyInput) {
     std::vector<Image> inputs;
     for (int i = 0; i < kFixtureFrames; ++i) inputs.push_back(sequence.readFrame(i).beauty);
     const double input = fixtureRelMse(inputs);
-    EXPECT_GT(input, 0.05);  // 1 spp is noisy
+    EXPECT_GT(input, 0.5);  // 1 spp of a room lit mostly by bounced light is very noisy
     EXPECT_TRUE(std::isfinite(input));
 }
 
 // End to end: Blender's passes (motion from its Vector pass, no matrices) denoised by every
-// method, scored against the fixture's 4096-spp reference. The figures: docs/inputs.md.
+// method, scored against the fixture's 4096-spp reference. The figures:
+// tests/data/blender/README.md.
 TEST(BlenderFixture, DenoisingBeatsTheInput) {
     const BlenderSequence sequence(kFixture / "noisy");
     std::vector<Image> inputs;

@@ -37,20 +37,51 @@ def parse_arguments():
                              "forward 0.2 a frame")
     parser.add_argument("--cube-step", type=float, default=0.15,
                         help="the moving cube's +x translation a frame (world units)")
+    parser.add_argument("--light-power", type=float, default=160.0,
+                        help="the ceiling light's power (W)")
     parser.add_argument("--filter-width", type=float, default=0.01,
                         help="pixel filter width: 0.01 puts every sample at the pixel centre, "
                              "so a 1-spp G-buffer is the primary ray through the centre")
     return parser.parse_args(argv)
 
 
-def material(name, color, roughness=0.8, metallic=0.0):
+def principled(name, color, roughness=0.8, metallic=0.0):
     mat = bpy.data.materials.new(name)
     mat.use_nodes = True
     bsdf = mat.node_tree.nodes["Principled BSDF"]
     bsdf.inputs["Base Color"].default_value = (*color, 1.0)
     bsdf.inputs["Roughness"].default_value = roughness
     bsdf.inputs["Metallic"].default_value = metallic
+    bsdf.inputs["Specular"].default_value = 0.0 if metallic == 0.0 else 0.5
     return mat
+
+
+def checker(name, color1, color2, scale):
+    """A diffuse checkerboard in object coordinates, 1 / scale metres a square."""
+    mat = principled(name, color1)
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    coordinates = nodes.new("ShaderNodeTexCoord")
+    texture = nodes.new("ShaderNodeTexChecker")
+    texture.inputs["Color1"].default_value = (*color1, 1.0)
+    texture.inputs["Color2"].default_value = (*color2, 1.0)
+    texture.inputs["Scale"].default_value = scale
+    links.new(coordinates.outputs["Object"], texture.inputs["Vector"])
+    links.new(texture.outputs["Color"], nodes["Principled BSDF"].inputs["Base Color"])
+    return mat
+
+
+def mesh_object(name, vertices, faces, materials, face_materials, pass_index):
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(vertices, [], faces)
+    for mat in materials:
+        mesh.materials.append(mat)
+    for polygon, index in zip(mesh.polygons, face_materials):
+        polygon.material_index = index
+    mesh.update()
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.pass_index = pass_index
+    return obj
 
 
 def add_object(obj, mat, pass_index):
@@ -69,36 +100,69 @@ def linear_keys(obj, path, frames_and_values):
             key.interpolation = "LINEAR"
 
 
+# The room: x -W..W, y FRONT..BACK, z 0..H; the camera stands inside it near the front wall.
+ROOM_W, ROOM_FRONT, ROOM_BACK, ROOM_H = 2.5, -2.6, 3.0, 2.6
+# The window in the back wall (x0, x1, z0, z1): the only opening, the sky behind it.
+WINDOW = (-0.9, 1.5, 1.25, 2.45)
+CAMERA_LOCATION = (0.0, -2.2, 1.3)
+
+
+def build_room():
+    """Walls and ceiling as one mesh (pass_index 1), faces towards the inside."""
+    w, f, b, h = ROOM_W, ROOM_FRONT, ROOM_BACK, ROOM_H
+    x0, x1, z0, z1 = WINDOW
+    vertices, faces, face_materials = [], [], []
+
+    def quad(corners, material_index):
+        start = len(vertices)
+        vertices.extend(corners)
+        faces.append(tuple(range(start, start + 4)))
+        face_materials.append(material_index)
+
+    quad([(-w, f, 0), (-w, b, 0), (-w, b, h), (-w, f, h)], 1)  # left, red
+    quad([(w, b, 0), (w, f, 0), (w, f, h), (w, b, h)], 2)  # right, green
+    quad([(w, f, 0), (-w, f, 0), (-w, f, h), (w, f, h)], 0)  # front, behind the camera
+    quad([(-w, f, h), (-w, b, h), (w, b, h), (w, f, h)], 0)  # ceiling
+    # The back wall around the window.
+    quad([(-w, b, 0), (w, b, 0), (w, b, z0), (-w, b, z0)], 0)
+    quad([(-w, b, z1), (w, b, z1), (w, b, h), (-w, b, h)], 0)
+    quad([(-w, b, z0), (x0, b, z0), (x0, b, z1), (-w, b, z1)], 0)
+    quad([(x1, b, z0), (w, b, z0), (w, b, z1), (x1, b, z1)], 0)
+    materials = [principled("white", (0.72, 0.70, 0.65)), principled("red", (0.65, 0.12, 0.08)),
+                 principled("green", (0.14, 0.45, 0.16))]
+    return mesh_object("Room", vertices, faces, materials, face_materials, 1)
+
+
 def build_scene(args):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     first, last = args.first_frame, args.first_frame + args.frames - 1
 
-    bpy.ops.mesh.primitive_plane_add(size=20, location=(0, 0, 0))
-    add_object(bpy.context.object, material("floor", (0.6, 0.6, 0.55)), 0).name = "Floor"
-    # The wall does not reach the top of the image: the sky above it is background.
-    bpy.ops.mesh.primitive_cube_add(size=1, location=(0, 4, 1.0))
-    wall = bpy.context.object
-    wall.scale = (12, 0.2, 2.0)
-    add_object(wall, material("wall", (0.7, 0.3, 0.25)), 1).name = "Wall"
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.7, location=(-1.3, 1.5, 0.7), segments=32,
+    w, f, b = ROOM_W, ROOM_FRONT, ROOM_BACK
+    floor = mesh_object("Floor", [(-w, f, 0), (w, f, 0), (w, b, 0), (-w, b, 0)], [(0, 1, 2, 3)],
+                        [checker("floor", (0.70, 0.62, 0.48), (0.22, 0.20, 0.18), 2.0)], [0], 0)
+    room = build_room()
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.6, location=(-1.2, 1.7, 0.6), segments=32,
                                          ring_count=16)
     sphere = bpy.context.object
     bpy.ops.object.shade_smooth()
-    add_object(sphere, material("glossy", (0.8, 0.8, 0.85), roughness=0.25, metallic=1.0), 2)
+    add_object(sphere, principled("glossy", (0.8, 0.8, 0.85), roughness=0.3, metallic=1.0), 2)
     sphere.name = "GlossySphere"
-    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.2, 0.8, 0.5))
+    cube_start = Vector((0.1, 0.9, 0.4))
+    bpy.ops.mesh.primitive_cube_add(size=0.8, location=cube_start)
     cube = bpy.context.object
-    add_object(cube, material("cube", (0.2, 0.4, 0.8)), 3).name = "MovingCube"
-    linear_keys(cube, "location", [(first, Vector((0.2, 0.8, 0.5))),
-                                   (last, Vector((0.2 + args.cube_step * (last - first), 0.8,
-                                                  0.5)))])
+    cube.rotation_euler = (0, 0, math.radians(20))
+    add_object(cube, principled("cube", (0.15, 0.3, 0.75)), 3).name = "MovingCube"
+    linear_keys(cube, "location",
+                [(first, cube_start),
+                 (last, cube_start + Vector((args.cube_step * (last - first), 0, 0)))])
 
-    bpy.ops.object.light_add(type="AREA", location=(1.5, -1.0, 4.0))
+    # A 1.2 m square ceiling light facing down, above and ahead of the camera on its left, out of
+    # its view: the far half of the room is lit mostly by bounced light.
+    bpy.ops.object.light_add(type="AREA", location=(-1.6, -1.6, ROOM_H - 0.02))
     light = bpy.context.object
-    light.data.energy = 400.0
-    light.data.size = 1.5
-    light.rotation_euler = (math.radians(20), math.radians(10), 0)
+    light.data.energy = args.light_power
+    light.data.size = 1.2
 
     world = bpy.data.worlds.new("World")
     scene.world = world
@@ -106,22 +170,23 @@ def build_scene(args):
     world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.05, 0.07, 0.12, 1)
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
 
-    bpy.ops.object.camera_add(location=(0, -6, 1.6), rotation=(math.radians(82), 0, 0))
+    location = Vector(CAMERA_LOCATION)
+    bpy.ops.object.camera_add(location=location, rotation=(math.radians(82), 0, 0))
     camera = bpy.context.object
     camera.data.lens = 32
     camera.data.sensor_fit = "HORIZONTAL"
     scene.camera = camera
     if args.camera == "pan":
         linear_keys(camera, "location",
-                    [(first, Vector((0, -6, 1.6))),
-                     (last, Vector((0.1 * (last - first), -6, 1.6)))])
+                    [(first, location),
+                     (last, location + Vector((0.1 * (last - first), 0, 0)))])
         linear_keys(camera, "rotation_euler",
                     [(first, Vector((math.radians(82), 0, 0))),
                      (last, Vector((math.radians(82), 0, math.radians(1.0 * (last - first)))))])
     elif args.camera == "dolly":
         linear_keys(camera, "location",
-                    [(first, Vector((0, -6, 1.6))),
-                     (last, Vector((0, -6 + 0.2 * (last - first), 1.6)))])
+                    [(first, location),
+                     (last, location + Vector((0, 0.2 * (last - first), 0)))])
 
     scene.frame_start, scene.frame_end = first, last
     scene.render.resolution_x, scene.render.resolution_y = args.width, args.height
@@ -134,11 +199,11 @@ def build_scene(args):
     scene.cycles.use_adaptive_sampling = False
     scene.cycles.use_denoising = False  # the noisy frames are the input; Debian's build lacks OIDN
     scene.cycles.filter_width = args.filter_width
-    scene.cycles.max_bounces = 6
+    # Cycles' default bounces (12 in all, 4 diffuse, 4 glossy), no clamping.
+    scene.cycles.sample_clamp_direct = 0.0
     scene.cycles.sample_clamp_indirect = 0.0
     scene.view_settings.view_transform = "Standard"
-    return scene, camera, [bpy.data.objects[n] for n in
-                           ("Floor", "Wall", "GlossySphere", "MovingCube")]
+    return scene, camera, [floor, room, sphere, cube]
 
 
 def enable_passes(view_layer):
@@ -193,7 +258,8 @@ def write_scene_json(path, scene, camera, objects, args):
     info = {"width": args.width, "height": args.height, "firstFrame": scene.frame_start,
             "frameCount": args.frames, "spp": args.spp, "referenceSpp": args.ref_spp,
             "seed": args.seed, "camera": args.camera, "cubeStep": args.cube_step,
-            "filterWidth": args.filter_width, "blender": bpy.app.version_string,
+            "filterWidth": args.filter_width, "lightPower": args.light_power,
+            "blender": bpy.app.version_string,
             "frames": frames}
     with open(path, "w") as f:
         json.dump(info, f, indent=1)
