@@ -86,7 +86,32 @@ class Sequence {
 // folder if needed.
 void writeFrame(const std::filesystem::path& folder, int index, const Frame& frame);
 
-// Linear float EXR (ZIP compression): R,G,B for 3 channels, Y for 1.
+// The compressions OpenEXR 3.1 writes. Lossless: none, rle, zips, zip, piz; b44 and b44a too for
+// FLOAT channels (they compress HALF ones only); pxr24 for HALF (FLOAT loses its 8 low mantissa
+// bits). Lossy: b44, b44a on HALF; dwaa, dwab (a DCT of R, G, B and Y, both types).
+enum class ExrCompression { None, Rle, Zips, Zip, Piz, Pxr24, B44, B44a, Dwaa, Dwab };
+
+// "none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab".
+const char* toString(ExrCompression compression);
+// Every compression, in the order above.
+const std::vector<ExrCompression>& exrCompressions();
+// The compression named `name` (any case); throws InvalidArgument naming it and the choices.
+ExrCompression exrCompressionNamed(std::string_view name);
+// Whether a file written with `compression` reads back the values written: bit-exact floats, or
+// for HALF channels exactly the half-rounded values.
+bool isLossless(ExrCompression compression, bool half);
+
+struct ExrWriteOptions {
+    // Lossless and the fastest: a denoised image's float values barely compress (zip: 13 %
+    // smaller, several times slower to write than denoising; docs/performance-cpu.md).
+    ExrCompression compression = ExrCompression::None;
+    bool half = false;  // HALF channels (values rounded to the nearest half) instead of FLOAT
+};
+
+// Linear EXR: R,G,B for 3 channels, Y for 1; FLOAT (or HALF) channels, compressed as asked.
+void writeExr(const std::filesystem::path& file, const Image& image,
+              const ExrWriteOptions& options);
+// The same with the default options.
 void writeExr(const std::filesystem::path& file, const Image& image);
 // Threads OpenEXR uses to decompress and compress one file's blocks (0, its default: the
 // calling thread alone). Process-wide, as OpenEXR's own setting is; the CLI sets the core count.
