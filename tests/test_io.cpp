@@ -183,7 +183,7 @@ void writeCustomExr(const fs::path& file,
             const float v = value(int(c), int(i));
             halves[c][i] = half(v);
             floats[c][i] = v;
-            uints[c][i] = unsigned(v);
+            if (type == Imf::UINT) uints[c][i] = unsigned(v);  // (negative: undefined)
         }
         void* base = type == Imf::HALF    ? static_cast<void*>(halves[c].data())
                      : type == Imf::FLOAT ? static_cast<void*>(floats[c].data())

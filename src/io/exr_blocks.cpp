@@ -252,6 +252,7 @@ std::optional<Image> readExrBlocks(const std::filesystem::path& file,
     try {
         stream.seekg(8);
         header.readFrom(stream, version);
+        header.sanityCheck(false);  // what OpenEXR's InputFile (and so readExrSize) refuses
     } catch (const std::exception&) {
         return std::nullopt;
     }
