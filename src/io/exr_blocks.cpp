@@ -17,7 +17,9 @@
 #else
 #include <zlib.h>
 #endif
-#if defined(__SSE2__)
+#if defined(__SSSE3__)
+#include <tmmintrin.h>
+#elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
@@ -194,8 +196,11 @@ class DecodeTask final : public IlmThread::Task {
 void undoZipPredictor(unsigned char* bytes, std::size_t count) {
     std::size_t i = 1;
 #if defined(__SSE2__)
-    // A running sum of (t[i] - 128) mod 256 over 16 bytes: four shifted adds, then the carry-in.
+    // A running sum of (t[i] - 128) mod 256 over 16 bytes: four shifted adds, then the carry-in,
+    // the previous 16's last byte, kept in a register (through memory, the store-to-load latency
+    // set the pace).
     const __m128i bias = _mm_set1_epi8(char(-128));
+    __m128i carry = _mm_set1_epi8(char(count > 0 ? bytes[0] : 0));
     for (; count >= 16 && i <= count - 16; i += 16) {
         __m128i x =
             _mm_add_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(bytes + i)), bias);
@@ -203,8 +208,14 @@ void undoZipPredictor(unsigned char* bytes, std::size_t count) {
         x = _mm_add_epi8(x, _mm_slli_si128(x, 2));
         x = _mm_add_epi8(x, _mm_slli_si128(x, 4));
         x = _mm_add_epi8(x, _mm_slli_si128(x, 8));
-        x = _mm_add_epi8(x, _mm_set1_epi8(char(bytes[i - 1])));
+        x = _mm_add_epi8(x, carry);
         _mm_storeu_si128(reinterpret_cast<__m128i*>(bytes + i), x);
+#if defined(__SSSE3__)
+        carry = _mm_shuffle_epi8(x, _mm_set1_epi8(15));
+#else
+        const __m128i high = _mm_shufflehi_epi16(_mm_unpackhi_epi8(x, x), 0xff);
+        carry = _mm_unpackhi_epi64(high, high);
+#endif
     }
 #endif
     for (; i < count; ++i) bytes[i] = static_cast<unsigned char>(bytes[i - 1] + bytes[i] - 128);
