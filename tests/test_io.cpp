@@ -386,6 +386,42 @@ TEST(Exr, DirectReaderAgreesWithOpenExr) {
     EXPECT_FALSE(rtd::io_detail::readExrBlocks(file, chosen).has_value());
 }
 
+// The direct writer of uncompressed files writes what OpenEXR's writer writes, byte for byte.
+TEST(Exr, UncompressedFilesAreOpenExrsBytes) {
+    TempDir dir;
+    for (int channels : {3, 1}) {
+        for (bool half : {false, true}) {
+            SCOPED_TRACE(std::to_string(channels) + (half ? " half" : " float"));
+            const Image image = patternImage(13, 7, channels, -0.3f);
+            rtd::writeExr(dir / "direct.exr", image, {rtd::ExrCompression::None, half});
+
+            Imf::Header header(image.width, image.height, 1.0f, Imath::V2f(0, 0), 1.0f,
+                               Imf::INCREASING_Y, Imf::NO_COMPRESSION);
+            const std::vector<std::string> names = channels == 3
+                                                       ? std::vector<std::string>{"R", "G", "B"}
+                                                       : std::vector<std::string>{"Y"};
+            std::vector<::half> halves(image.pixels.begin(), image.pixels.end());
+            Imf::FrameBuffer frameBuffer;
+            for (int c = 0; c < channels; ++c) {
+                header.channels().insert(names[c], Imf::Channel(half ? Imf::HALF : Imf::FLOAT));
+                char* base =
+                    half ? reinterpret_cast<char*>(halves.data() + c)
+                         : reinterpret_cast<char*>(const_cast<float*>(image.pixels.data() + c));
+                const std::size_t size = half ? 2 : 4;
+                frameBuffer.insert(names[c],
+                                   Imf::Slice(half ? Imf::HALF : Imf::FLOAT, base, size * channels,
+                                              size * channels * image.width));
+            }
+            {
+                Imf::OutputFile out((dir / "openexr.exr").c_str(), header);
+                out.setFrameBuffer(frameBuffer);
+                out.writePixels(image.height);
+            }
+            EXPECT_EQ(readBytes(dir / "direct.exr"), readBytes(dir / "openexr.exr"));
+        }
+    }
+}
+
 // A ZIP block whose deflate stream is corrupt is not the direct reader's to report: readExr
 // fails as OpenEXR does, naming the file.
 TEST(Exr, CorruptBlockIsReportedByOpenExr) {

@@ -8,8 +8,10 @@
 #include <ImfHeader.h>
 #include <ImfIO.h>
 #include <ImfPartType.h>
+#include <ImfStdIO.h>
 #include <ImfThreading.h>
 #include <ImfVersion.h>
+#include <ImfXdr.h>
 #include <half.h>
 
 #if RTD_HAS_LIBDEFLATE
@@ -192,6 +194,63 @@ class DecodeTask final : public IlmThread::Task {
 };
 
 }  // namespace
+
+std::string uncompressedExrBytes(const Imf::Header& header, const Image& image,
+                                 const std::vector<std::string>& channelNames) {
+    static_assert(std::endian::native == std::endian::little, "EXR values are little-endian");
+    // Each line holds the header's channels in its order (by name), each channel's values in turn.
+    struct Column {
+        int imageChannel;
+        bool half;
+    };
+    std::vector<Column> columns;
+    std::size_t lineBytes = 0;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+        const auto named = std::find(channelNames.begin(), channelNames.end(), it.name());
+        const bool half = it.channel().type == Imf::HALF;
+        columns.push_back({int(named - channelNames.begin()), half});
+        lineBytes += std::size_t(image.width) * (half ? 2 : 4);
+    }
+    // The start OpenEXR writes: magic number, version (scan lines, names of up to 31
+    // characters), the header's attributes and its end.
+    Imf::StdOSStream start;
+    Imf::Xdr::write<Imf::StreamIO>(start, Imf::MAGIC);
+    Imf::Xdr::write<Imf::StreamIO>(start, Imf::EXR_VERSION);
+    header.writeTo(start, false);
+    const std::string headerBytes = start.str();
+
+    const std::size_t lines = std::size_t(image.height);
+    const std::size_t chunkBytes = 8 + lineBytes;  // line number, byte count, values
+    std::string bytes(headerBytes.size() + 8 * lines + chunkBytes * lines, '\0');
+    std::memcpy(bytes.data(), headerBytes.data(), headerBytes.size());
+    char* table = bytes.data() + headerBytes.size();
+    char* chunk = table + 8 * lines;
+    const int firstLine = header.dataWindow().min.y;
+    const std::size_t width = std::size_t(image.width);
+    const std::size_t stride = std::size_t(image.channels);
+    for (std::size_t y = 0; y < lines; ++y, chunk += chunkBytes) {
+        const std::uint64_t offset = std::uint64_t(chunk - bytes.data());
+        const std::int32_t lineNumber = std::int32_t(firstLine + std::int64_t(y));
+        const std::int32_t byteCount = std::int32_t(lineBytes);
+        std::memcpy(table + 8 * y, &offset, 8);
+        std::memcpy(chunk, &lineNumber, 4);
+        std::memcpy(chunk + 4, &byteCount, 4);
+        char* out = chunk + 8;
+        for (const Column& column : columns) {
+            const float* in = image.pixels.data() + y * width * stride + column.imageChannel;
+            if (column.half) {
+                for (std::size_t x = 0; x < width; ++x, out += 2) {
+                    const std::uint16_t bits = half(in[x * stride]).bits();
+                    std::memcpy(out, &bits, 2);
+                }
+            } else {
+                for (std::size_t x = 0; x < width; ++x, out += 4)
+                    std::memcpy(out, in + x * stride, 4);
+            }
+        }
+    }
+    return bytes;
+}
 
 void undoZipPredictor(unsigned char* bytes, std::size_t count) {
     std::size_t i = 1;

@@ -1,6 +1,9 @@
 // Private to the I/O layer: the direct reader of plain scan-line EXR files that readExr tries
-// before OpenEXR's own, and the parts of it the tests check alone.
+// before OpenEXR's own, the direct writer of uncompressed ones, and the parts of them the tests
+// check alone.
 #pragma once
+
+#include <ImfForward.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -36,6 +39,14 @@ std::optional<Image> readExrBlocks(const std::filesystem::path& file,
 // readExr without the direct reader: OpenEXR alone (the tests compare the two).
 Image readExrWithOpenExr(const std::filesystem::path& file,
                          const std::vector<std::vector<std::string>>& channelChoices);
+
+// The bytes of an uncompressed single-part scan-line EXR of `image` with `header` (its channels
+// and data window, of image's size): what OpenEXR writes, byte for byte. Image channel c goes to
+// the header's channel channelNames[c], FLOAT or HALF (rounded to nearest even). OpenEXR's writer
+// hands every line, a block of its own, to its thread pool and waits for it: 512 hand-offs for a
+// 512-line image, longer than the copy.
+std::string uncompressedExrBytes(const Imf::Header& header, const Image& image,
+                                 const std::vector<std::string>& channelNames);
 
 // ZIP's byte transforms, undone: t[i] += t[i-1] - 128 over the block (a running sum), then the
 // block's first and second halves interleaved byte by byte into `out`.

@@ -509,19 +509,23 @@ void writeExr(const std::filesystem::path& file, const Image& image,
                         std::to_string(image.width) + "x" + std::to_string(image.height) + ")");
     }
     const Imf::Compression compression = entryOf(options.compression).imf;
+    static const char* const rgb[] = {"R", "G", "B"};
+    static const char* const gray[] = {"Y"};
+    const char* const* names = image.channels == 3 ? rgb : gray;
+    Imf::Header header(image.width, image.height, 1.0f, Imath::V2f(0, 0), 1.0f, Imf::INCREASING_Y,
+                       compression);
+    const Imf::PixelType fileType = options.half ? Imf::HALF : Imf::FLOAT;
+    for (int c = 0; c < image.channels; ++c) {
+        header.channels().insert(names[c], Imf::Channel(fileType));
+    }
+    if (compression == Imf::NO_COMPRESSION) {
+        writeFileAtomically(
+            file, io_detail::uncompressedExrBytes(header, image, {names, names + image.channels}));
+        return;
+    }
     io_detail::requireParentFolder(file);
     io_detail::TemporaryFile temporary(io_detail::temporaryPathFor(file));
     try {
-        static const char* const rgb[] = {"R", "G", "B"};
-        static const char* const gray[] = {"Y"};
-        const char* const* names = image.channels == 3 ? rgb : gray;
-
-        Imf::Header header(image.width, image.height, 1.0f, Imath::V2f(0, 0), 1.0f,
-                           Imf::INCREASING_Y, compression);
-        const Imf::PixelType fileType = options.half ? Imf::HALF : Imf::FLOAT;
-        for (int c = 0; c < image.channels; ++c) {
-            header.channels().insert(names[c], Imf::Channel(fileType));
-        }
         // OpenEXR's writer does not convert FLOAT to HALF: the halves (rounded to nearest even)
         // are made here.
         std::vector<half> halves;
@@ -539,10 +543,7 @@ void writeExr(const std::filesystem::path& file, const Image& image,
                 Imf::Slice(fileType, const_cast<char*>(base + c * valueBytes), xStride, yStride));
         }
         {
-            // Uncompressed lines are only copied: handing them to the pool costs more than it
-            // saves (docs/performance-cpu.md, 2026-12-02).
-            const int threads = compression == Imf::NO_COMPRESSION ? 0 : Imf::globalThreadCount();
-            Imf::OutputFile output(temporary.path().c_str(), header, threads);
+            Imf::OutputFile output(temporary.path().c_str(), header, Imf::globalThreadCount());
             output.setFrameBuffer(frameBuffer);
             output.writePixels(image.height);
         }  // the destructor finishes the file before the rename
