@@ -30,7 +30,7 @@ extern "C" void onTerminationSignal(int signal) {
 
 // A run frees and allocates each frame's buffers (megabytes each) again and again: glibc would
 // map them from the system and return them every time, to be zero-filled page by page anew;
-// kept by malloc instead, a frame is read about a fifth faster (docs/performance-cpu.md).
+// kept by malloc instead, reading a frame costs less (docs/performance-cpu.md, 2026-12-02).
 void keepFreedFrameBuffers() {
 #if defined(__GLIBC__)
     mallopt(M_MMAP_THRESHOLD, 32 << 20);  // the largest glibc allows
@@ -101,8 +101,8 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         return app.exit(e);
     }
-    // EXR files are (de)compressed block by block on every core: writing a 512x512 result with
-    // ZIP takes 70 ms on one core of the development machine, 42 on two.
+    // EXR files are (de)compressed block by block on every core: the course data's ZIP blocks
+    // and a compressed --compression's (the figures: docs/performance-cpu.md, 2026-12-02).
     rtd::setExrThreads(int(std::thread::hardware_concurrency()));
     try {
         for (auto& command : commands)

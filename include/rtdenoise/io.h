@@ -102,8 +102,8 @@ ExrCompression exrCompressionNamed(std::string_view name);
 bool isLossless(ExrCompression compression, bool half);
 
 struct ExrWriteOptions {
-    // Lossless and the fastest: a denoised image's float values barely compress (zip: 13 %
-    // smaller, several times slower to write than denoising; docs/performance-cpu.md).
+    // Lossless and the fastest: a denoised image's float values barely compress, and deflating
+    // them takes longer than denoising them (docs/performance-cpu.md, 2026-12-02).
     ExrCompression compression = ExrCompression::None;
     bool half = false;  // HALF channels (values rounded to the nearest half) instead of FLOAT
 };
