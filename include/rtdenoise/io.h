@@ -82,8 +82,8 @@ class Sequence {
 // ---- writing ----
 
 // Writes frame `index` of `frame` in the course layout into `folder` (beauty, normal, position,
-// depth, ID, matrix, and albedo when the frame has one): what Sequence reads back. Creates the
-// folder if needed.
+// depth, ID, matrix, and albedo when the frame has one): what Sequence reads back, the EXRs with
+// writeExr's default options. Creates the folder if needed.
 void writeFrame(const std::filesystem::path& folder, int index, const Frame& frame);
 
 // The compressions OpenEXR 3.1 writes. Lossless: none, rle, zips, zip, piz; b44 and b44a too for
