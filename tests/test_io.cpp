@@ -260,23 +260,24 @@ TEST(Exr, EveryCompressionRoundTrips) {
                         (0.4f + 0.3f * float(c));
     ASSERT_EQ(rtd::exrCompressions().size(), 10u);
     for (rtd::ExrCompression compression : rtd::exrCompressions()) {
-        for (bool half : {false, true}) {
-            SCOPED_TRACE(std::string(rtd::toString(compression)) + (half ? " half" : " float"));
+        for (bool halfChannels : {false, true}) {
+            SCOPED_TRACE(std::string(rtd::toString(compression)) +
+                         (halfChannels ? " half" : " float"));
             const fs::path file = dir / (std::string(rtd::toString(compression)) + ".exr");
-            rtd::writeExr(file, image, {compression, half});
+            rtd::writeExr(file, image, {compression, halfChannels});
             const Image back = rtd::readExr(file, kRgb);
             EXPECT_EQ(back.pixels, rtd::io_detail::readExrWithOpenExr(file, kRgb).pixels);
             ASSERT_EQ(back.pixels.size(), image.pixels.size());
             double maxOfRange = 0.0, maxOfValue = 0.0;  // errors over the range 2, the value
             std::size_t differing = 0;
             for (std::size_t i = 0; i < image.pixels.size(); ++i) {
-                const float written = half ? float(::half(image.pixels[i])) : image.pixels[i];
+                const float written = halfChannels ? float(half(image.pixels[i])) : image.pixels[i];
                 const double error = std::abs(double(back.pixels[i]) - written);
                 differing += back.pixels[i] != written;
                 maxOfRange = std::max(maxOfRange, error / 2.0);
                 maxOfValue = std::max(maxOfValue, error / std::abs(written));
             }
-            if (rtd::isLossless(compression, half)) {
+            if (rtd::isLossless(compression, halfChannels)) {
                 EXPECT_EQ(differing, 0u) << "max error " << maxOfRange << " of the range";
             } else if (compression == rtd::ExrCompression::Pxr24) {
                 // pxr24 rounds float to 15 mantissa bits: within 2^-16 of each value.
@@ -390,27 +391,29 @@ TEST(Exr, DirectReaderAgreesWithOpenExr) {
 TEST(Exr, UncompressedFilesAreOpenExrsBytes) {
     TempDir dir;
     for (int channels : {3, 1}) {
-        for (bool half : {false, true}) {
-            SCOPED_TRACE(std::to_string(channels) + (half ? " half" : " float"));
+        for (bool halfChannels : {false, true}) {
+            SCOPED_TRACE(std::to_string(channels) + (halfChannels ? " half" : " float"));
             const Image image = patternImage(13, 7, channels, -0.3f);
-            rtd::writeExr(dir / "direct.exr", image, {rtd::ExrCompression::None, half});
+            rtd::writeExr(dir / "direct.exr", image, {rtd::ExrCompression::None, halfChannels});
 
             Imf::Header header(image.width, image.height, 1.0f, Imath::V2f(0, 0), 1.0f,
                                Imf::INCREASING_Y, Imf::NO_COMPRESSION);
             const std::vector<std::string> names = channels == 3
                                                        ? std::vector<std::string>{"R", "G", "B"}
                                                        : std::vector<std::string>{"Y"};
-            std::vector<::half> halves(image.pixels.begin(), image.pixels.end());
+            std::vector<half> halves(image.pixels.begin(), image.pixels.end());
             Imf::FrameBuffer frameBuffer;
             for (int c = 0; c < channels; ++c) {
-                header.channels().insert(names[c], Imf::Channel(half ? Imf::HALF : Imf::FLOAT));
+                header.channels().insert(names[c],
+                                         Imf::Channel(halfChannels ? Imf::HALF : Imf::FLOAT));
                 char* base =
-                    half ? reinterpret_cast<char*>(halves.data() + c)
-                         : reinterpret_cast<char*>(const_cast<float*>(image.pixels.data() + c));
-                const std::size_t size = half ? 2 : 4;
+                    halfChannels
+                        ? reinterpret_cast<char*>(halves.data() + c)
+                        : reinterpret_cast<char*>(const_cast<float*>(image.pixels.data() + c));
+                const std::size_t size = halfChannels ? 2 : 4;
                 frameBuffer.insert(names[c],
-                                   Imf::Slice(half ? Imf::HALF : Imf::FLOAT, base, size * channels,
-                                              size * channels * image.width));
+                                   Imf::Slice(halfChannels ? Imf::HALF : Imf::FLOAT, base,
+                                              size * channels, size * channels * image.width));
             }
             {
                 Imf::OutputFile out((dir / "openexr.exr").c_str(), header);

@@ -201,15 +201,15 @@ std::string uncompressedExrBytes(const Imf::Header& header, const Image& image,
     // Each line holds the header's channels in its order (by name), each channel's values in turn.
     struct Column {
         int imageChannel;
-        bool half;
+        bool isHalf;
     };
     std::vector<Column> columns;
     std::size_t lineBytes = 0;
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
         const auto named = std::find(channelNames.begin(), channelNames.end(), it.name());
-        const bool half = it.channel().type == Imf::HALF;
-        columns.push_back({int(named - channelNames.begin()), half});
-        lineBytes += std::size_t(image.width) * (half ? 2 : 4);
+        const bool isHalf = it.channel().type == Imf::HALF;
+        columns.push_back({int(named - channelNames.begin()), isHalf});
+        lineBytes += std::size_t(image.width) * (isHalf ? 2 : 4);
     }
     // The start OpenEXR writes: magic number, version (scan lines, names of up to 31
     // characters), the header's attributes and its end.
@@ -238,7 +238,7 @@ std::string uncompressedExrBytes(const Imf::Header& header, const Image& image,
         char* out = chunk + 8;
         for (const Column& column : columns) {
             const float* in = image.pixels.data() + y * width * stride + column.imageChannel;
-            if (column.half) {
+            if (column.isHalf) {
                 for (std::size_t x = 0; x < width; ++x, out += 2) {
                     const std::uint16_t bits = half(in[x * stride]).bits();
                     std::memcpy(out, &bits, 2);
