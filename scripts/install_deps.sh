@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs what rtdenoise needs to build, test and make videos, from Debian's packages.
 set -euo pipefail
-# libclang-rt-dev: clang's sanitizer and libFuzzer runtimes (the debug and fuzz presets).
+# libclang-rt-dev: clang's sanitizer and libFuzzer runtimes (the debug and fuzz presets);
+# libdeflate-dev: the EXR reader's faster inflate (optional: zlib without it).
 packages=(cmake ninja-build clang libclang-rt-dev libomp-dev g++ libopenexr-dev libpng-dev
-          libfmt-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg)
+          libdeflate-dev libfmt-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,7 +1,11 @@
 // The rtdenoise command as a user runs it: outputs, config files, progress, and the errors for
 // bad input (message naming the file, non-zero exit, nothing half-written).
+#include <ImfChannelList.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <half.h>
 #include <signal.h>
 #include <spawn.h>
 
@@ -46,12 +50,12 @@ TEST(Cli, HelpDocumentsEveryOption) {
     Result r = runCli("denoise --help");
     EXPECT_EQ(r.exitCode, 0);
     for (const char* option :
-         {"--method",          "--spatial-filter", "--device",      "--sigma-color",
-          "--sigma-normal",    "--sigma-plane",    "--sigma-coord", "--radius",
-          "--atrous-passes",   "--alpha",          "--clamp-k",     "--clamp-radius",
-          "--outlier",         "--outlier-radius", "--outlier-k",   "--png",
-          "--exposure",        "--video",          "--config",      "--debug",
-          "--separate-objects"})
+         {"--method",           "--spatial-filter", "--device",      "--sigma-color",
+          "--sigma-normal",     "--sigma-plane",    "--sigma-coord", "--radius",
+          "--atrous-passes",    "--alpha",          "--clamp-k",     "--clamp-radius",
+          "--outlier",          "--outlier-radius", "--outlier-k",   "--png",
+          "--exposure",         "--video",          "--config",      "--debug",
+          "--separate-objects", "--compression",    "--half"})
         EXPECT_NE(r.output.find(option), std::string::npos) << option;
     // The comparisons' switches (same result, another speed) are the bench's only.
     for (const char* option : {"--cpu-isa", "--tile-passes"})
@@ -566,6 +570,77 @@ TEST(Cli, ClampedRadianceAndMissingNormalsAreReported) {
                             {{"R"}, {"G"}, {"B"}});
         for (float v : out.pixels) ASSERT_TRUE(std::isfinite(v)) << i;
     }
+}
+
+}  // namespace
+}  // namespace rtd
+
+// ---- result_<i>.exr's compression and channel type (issue 22) ----
+
+namespace rtd {
+namespace {
+
+Imf::Header resultHeader(const fs::path& out, int frame) {
+    return Imf::InputFile((out / ("result_" + std::to_string(frame) + ".exr")).c_str()).header();
+}
+
+// --compression and --half (or their config keys) choose how result_<i>.exr is stored; the
+// values are the run's, rounded to half with --half.
+TEST(Cli, CompressionAndHalfChooseTheResultFiles) {
+    test::TempFolder dir("cli-compression");
+    const fs::path in = dir.path() / "in", out = dir.path() / "out";
+    writeSequence(in, 2);
+    ASSERT_EQ(runCli(denoiseCommand(in, out)).exitCode, 0);
+    EXPECT_EQ(resultHeader(out, 1).compression(), Imf::NO_COMPRESSION);  // the default
+    EXPECT_EQ(resultHeader(out, 1).channels().findChannel("R")->type, Imf::FLOAT);
+    const Image floats = readExr(out / "result_1.exr", {{"R"}, {"G"}, {"B"}});
+
+    Result r = runCli(denoiseCommand(in, out) + " --compression ZIP --half");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(resultHeader(out, 1).compression(), Imf::ZIP_COMPRESSION);
+    for (const char* name : {"R", "G", "B"})
+        EXPECT_EQ(resultHeader(out, 1).channels().findChannel(name)->type, Imf::HALF) << name;
+    const Image halves = readExr(out / "result_1.exr", {{"R"}, {"G"}, {"B"}});
+    ASSERT_EQ(halves.pixels.size(), floats.pixels.size());
+    std::size_t rounded = 0;
+    for (std::size_t i = 0; i < floats.pixels.size(); ++i) {
+        EXPECT_EQ(halves.pixels[i], float(half(floats.pixels[i]))) << i;
+        rounded += halves.pixels[i] != floats.pixels[i];
+    }
+    EXPECT_GT(rounded, 0u);  // the check above tells half from float
+
+    std::ofstream(dir.path() / "exr.toml") << "compression = \"piz\"\nhalf = true\n";
+    const std::string config = " --config " + quoted(dir.path() / "exr.toml");
+    ASSERT_EQ(runCli(denoiseCommand(in, out) + config).exitCode, 0);
+    EXPECT_EQ(resultHeader(out, 0).compression(), Imf::PIZ_COMPRESSION);
+    EXPECT_EQ(resultHeader(out, 0).channels().findChannel("G")->type, Imf::HALF);
+    ASSERT_EQ(runCli(denoiseCommand(in, out) + config + " --compression rle").exitCode, 0);
+    EXPECT_EQ(resultHeader(out, 0).compression(), Imf::RLE_COMPRESSION);  // the command wins
+}
+
+// A compression that does not exist fails naming the option and the choices, before anything
+// is written: on the command line and in a config file.
+TEST(Cli, AnUnknownCompressionIsRefusedBeforeAnythingIsWritten) {
+    test::TempFolder dir("cli-bad-compression");
+    const fs::path in = dir.path() / "in", out = dir.path() / "out";
+    writeSequence(in, 1);
+    const std::vector<std::string> choices = {"none",  "rle", "zips", "zip",  "piz",
+                                              "pxr24", "b44", "b44a", "dwaa", "dwab"};
+    Result r = runCli(denoiseCommand(in, out) + " --compression lzma");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "--compression: lzma not in")) << r.output;
+    for (const std::string& name : choices)
+        EXPECT_TRUE(contains(r.output, name)) << name << ": " << r.output;
+    EXPECT_FALSE(fs::exists(out));
+
+    std::ofstream(dir.path() / "bad.toml") << "compression = \"lzma\"\n";
+    r = runCli(denoiseCommand(in, out) + " --config " + quoted(dir.path() / "bad.toml"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, (dir.path() / "bad.toml").string() + ": compression = lzma"))
+        << r.output;
+    for (const std::string& name : choices)
+        EXPECT_TRUE(contains(r.output, name)) << name << ": " << r.output;
+    EXPECT_FALSE(fs::exists(out));
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <future>
@@ -37,6 +38,7 @@ struct DenoiseOptions {
     float exposure = 1.0f;
     int maxFrames = 0;
     bool quiet = false;
+    ExrWriteOptions exr;  // result_<i>.exr's compression and channel type
 };
 
 const std::map<std::string, Method> kMethods{{"jbf", Method::Jbf},
@@ -47,6 +49,11 @@ const std::map<std::string, SpatialFilter> kFilters{{"jbf", SpatialFilter::Jbf},
                                                     {"atrous", SpatialFilter::Atrous}};
 const std::map<std::string, DeviceType> kDevices{
     {"cpu", DeviceType::Cpu}, {"cuda", DeviceType::Cuda}, {"auto", DeviceType::Auto}};
+const std::map<std::string, ExrCompression> kCompressions = [] {
+    std::map<std::string, ExrCompression> names;
+    for (ExrCompression compression : exrCompressions()) names[toString(compression)] = compression;
+    return names;
+}();
 const std::map<std::string, TilePasses> kTilePasses{
     {"auto", TilePasses::Auto}, {"on", TilePasses::On}, {"off", TilePasses::Off}};
 
@@ -207,7 +214,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
                           std::vector<std::pair<std::string, Image>> debug) {
         return std::async(std::launch::async, [&, i, debug = std::move(debug)] {
             auto writeStart = Clock::now();
-            writeExr(options.output / fmt::format("result_{}.exr", i), result);
+            writeExr(options.output / fmt::format("result_{}.exr", i), result, options.exr);
             if (options.png || !options.video.empty()) {
                 Image display = toneMap(result, options.exposure);
                 if (options.png)
@@ -442,6 +449,14 @@ Command addDenoiseCommand(CLI::App& app) {
     c->add_option("-o,--output", options->output, "Output folder (created if missing)")->required();
     addDenoiserOptions(*c, *settings);
     c->add_flag("--png", options->png, "Also write result_<i>.png (ACES, sRGB)");
+    addChoice(*c, "--compression", options->exr.compression, kCompressions,
+              "Compression of result_<i>.exr. Lossless: none, rle, zips, zip, piz; b44, b44a "
+              "for float (they store float as is). Lossy: pxr24 for float, b44, b44a for half, "
+              "dwaa, dwab",
+              "none|rle|zips|zip|piz|pxr24|b44|b44a|dwaa|dwab");
+    c->add_flag("--half", options->exr.half,
+                "Write result_<i>.exr with HALF channels (rounded to the nearest half) instead "
+                "of FLOAT");
     c->add_option("--exposure", options->exposure, "Exposure multiplier before tone mapping")
         ->capture_default_str();
     c->add_option("--video", options->video, "Also write an H.264 MP4 (needs ffmpeg)");
@@ -456,6 +471,11 @@ Command addDenoiseCommand(CLI::App& app) {
         ->check(frameCountValidator());
     c->add_flag("-q,--quiet", options->quiet, "No progress or summary");
     return {c, [c, options, settings] {
+                // The reading and writing threads share the cores with the denoiser's: OpenMP
+                // threads that sleep when they wait, instead of spinning, leave them the time
+                // (docs/performance-cpu.md, 2026-12-02). Set before OpenMP starts; the caller's
+                // OMP_WAIT_POLICY wins.
+                ::setenv("OMP_WAIT_POLICY", "passive", 0);
                 if (!options->config.empty()) applyConfigFile(*c, options->config);
                 validate(*settings);
                 return runDenoise(*options, *settings);

@@ -2,6 +2,9 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -23,6 +26,16 @@ namespace {
 extern "C" void onTerminationSignal(int signal) {
     rtd::abandonTemporaryFiles();
     ::_exit(128 + signal);
+}
+
+// A run frees and allocates each frame's buffers (megabytes each) again and again: glibc would
+// map them from the system and return them every time, to be zero-filled page by page anew;
+// kept by malloc instead, reading a frame costs less (docs/performance-cpu.md, 2026-12-02).
+void keepFreedFrameBuffers() {
+#if defined(__GLIBC__)
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);  // the largest glibc allows
+    mallopt(M_TRIM_THRESHOLD, 1 << 30);
+#endif
 }
 
 void installTerminationHandlers() {
@@ -69,6 +82,7 @@ std::string unknownCommandMessage(CLI::App& app, const std::string& word) {
 
 int main(int argc, char** argv) {
     installTerminationHandlers();
+    keepFreedFrameBuffers();
     CLI::App app{"rtdenoise: real-time denoising of path-traced frame sequences"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "rtdenoise 0.1.0");
@@ -87,8 +101,8 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         return app.exit(e);
     }
-    // EXR files are (de)compressed block by block on every core: writing a 512x512 result with
-    // ZIP takes 70 ms on one core of the development machine, 42 on two.
+    // EXR files are (de)compressed block by block on every core: the course data's ZIP blocks
+    // and a compressed --compression's (the figures: docs/performance-cpu.md, 2026-12-02).
     rtd::setExrThreads(int(std::thread::hardware_concurrency()));
     try {
         for (auto& command : commands)

@@ -224,11 +224,36 @@ ChannelChoices colourChannelsOf(const std::filesystem::path& file,
 // ---- writing ----
 
 // Writes frame `index` of `frame` in the course layout into `folder` (beauty, normal, position,
-// depth, ID, matrix, and albedo when the frame has one): what Sequence reads back. Creates the
-// folder if needed.
+// depth, ID, matrix, and albedo when the frame has one): what Sequence reads back, the EXRs with
+// writeExr's default options. Creates the folder if needed.
 void writeFrame(const std::filesystem::path& folder, int index, const Frame& frame);
 
-// Linear float EXR (ZIP compression): R,G,B for 3 channels, Y for 1.
+// The compressions OpenEXR 3.1 writes. Lossless: none, rle, zips, zip, piz; b44 and b44a too for
+// FLOAT channels (they compress HALF ones only); pxr24 for HALF (FLOAT loses its 8 low mantissa
+// bits). Lossy: b44, b44a on HALF; dwaa, dwab (a DCT of R, G, B and Y, both types).
+enum class ExrCompression { None, Rle, Zips, Zip, Piz, Pxr24, B44, B44a, Dwaa, Dwab };
+
+// "none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab".
+const char* toString(ExrCompression compression);
+// Every compression, in the order above.
+const std::vector<ExrCompression>& exrCompressions();
+// The compression named `name` (any case); throws InvalidArgument naming it and the choices.
+ExrCompression exrCompressionNamed(std::string_view name);
+// Whether a file written with `compression` reads back the values written: bit-exact floats, or
+// for HALF channels exactly the half-rounded values.
+bool isLossless(ExrCompression compression, bool half);
+
+struct ExrWriteOptions {
+    // Lossless and the fastest: a denoised image's float values barely compress, and deflating
+    // them takes longer than denoising them (docs/performance-cpu.md, 2026-12-02).
+    ExrCompression compression = ExrCompression::None;
+    bool half = false;  // HALF channels (values rounded to the nearest half) instead of FLOAT
+};
+
+// Linear EXR: R,G,B for 3 channels, Y for 1; FLOAT (or HALF) channels, compressed as asked.
+void writeExr(const std::filesystem::path& file, const Image& image,
+              const ExrWriteOptions& options);
+// The same with the default options.
 void writeExr(const std::filesystem::path& file, const Image& image);
 
 // One image of a multi-channel EXR: channel c is written as `names[c]` (names.size() ==

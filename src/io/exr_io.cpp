@@ -11,8 +11,10 @@
 #include <ImfThreading.h>
 #include <ImfTileDescription.h>
 #include <ImfVersion.h>
+#include <half.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstddef>
 #include <cstdint>
 #include <exception>
@@ -20,11 +22,13 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <utility>
 #include <vector>
 
 #include "io/atomic_file.h"
+#include "io/exr_blocks.h"
 #include "rtdenoise/error.h"
 #include "rtdenoise/io.h"
 
@@ -51,15 +55,9 @@ std::string channelNames(const Imf::ChannelList& channels) {
     return count == 0 ? std::string("no channels") : out;
 }
 
-// A header's size is checked before anything is allocated for it: a corrupt or hostile header
-// would otherwise end in std::bad_alloc or an allocation of gigabytes.
-constexpr std::int64_t kMaxSide = 65536;
-constexpr std::int64_t kMaxPixels = std::int64_t(1) << 28;  // 16384 x 16384
-// OpenEXR allocates each (de)compression buffer at one block's claimed size, pixels of every
-// channel: a tile of 65536x65536, or a scan-line block of thousands of channels, from a file of
-// a few hundred bytes (fuzz_exr: malloc(1811939352)). 256 MB holds a 16384-wide block of 256
-// lines (DWAB's) of 4 float channels four times over.
-constexpr std::int64_t kMaxBlockBytes = std::int64_t(1) << 28;
+using io_detail::kMaxBlockBytes;  // the size limits, shared with the direct reader
+using io_detail::kMaxPixels;
+using io_detail::kMaxSide;
 
 // Scanlines per stored block of each compression (OpenEXR's own table is not public).
 int linesPerChunk(Imf::Compression compression) {
@@ -373,7 +371,18 @@ void setExrThreads(int count) {
     Imf::setGlobalThreadCount(count < 0 ? 0 : count);
 }
 
+Image io_detail::readExrWithOpenExr(const std::filesystem::path& file,
+                                    const ChannelChoices& channelChoices) {
+    return std::move(readExrImages(file, {channelChoices}).front());
+}
+
+// The files this project's own commands read most (scan-line none/zips/zip) by the direct
+// reader, anything else by OpenEXR.
 Image readExr(const std::filesystem::path& file, const ChannelChoices& channelChoices) {
+    requireReadableFile(file, {channelChoices});
+    checkClaimedSize(file);
+    if (std::optional<Image> image = io_detail::readExrBlocks(file, channelChoices))
+        return std::move(*image);
     return std::move(readExrImages(file, {channelChoices}).front());
 }
 
@@ -442,17 +451,136 @@ std::vector<Image> readExrImages(const std::filesystem::path& file,
     }
 }
 
+namespace {
+
+struct CompressionName {
+    ExrCompression compression;
+    const char* name;
+    Imf::Compression imf;
+};
+constexpr CompressionName kCompressionNames[] = {
+    {ExrCompression::None, "none", Imf::NO_COMPRESSION},
+    {ExrCompression::Rle, "rle", Imf::RLE_COMPRESSION},
+    {ExrCompression::Zips, "zips", Imf::ZIPS_COMPRESSION},
+    {ExrCompression::Zip, "zip", Imf::ZIP_COMPRESSION},
+    {ExrCompression::Piz, "piz", Imf::PIZ_COMPRESSION},
+    {ExrCompression::Pxr24, "pxr24", Imf::PXR24_COMPRESSION},
+    {ExrCompression::B44, "b44", Imf::B44_COMPRESSION},
+    {ExrCompression::B44a, "b44a", Imf::B44A_COMPRESSION},
+    {ExrCompression::Dwaa, "dwaa", Imf::DWAA_COMPRESSION},
+    {ExrCompression::Dwab, "dwab", Imf::DWAB_COMPRESSION},
+};
+
+const CompressionName& entryOf(ExrCompression compression) {
+    for (const CompressionName& entry : kCompressionNames)
+        if (entry.compression == compression) return entry;
+    throw Error(ErrorCode::InvalidArgument,
+                "unknown EXR compression " + std::to_string(int(compression)));
+}
+
+}  // namespace
+
+const char* toString(ExrCompression compression) {
+    return entryOf(compression).name;
+}
+
+const std::vector<ExrCompression>& exrCompressions() {
+    static const std::vector<ExrCompression> all = [] {
+        std::vector<ExrCompression> out;
+        for (const CompressionName& entry : kCompressionNames) out.push_back(entry.compression);
+        return out;
+    }();
+    return all;
+}
+
+ExrCompression exrCompressionNamed(std::string_view name) {
+    std::string lower(name);
+    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+    std::vector<std::string> names;
+    for (const CompressionName& entry : kCompressionNames) {
+        if (lower == entry.name) return entry.compression;
+        names.emplace_back(entry.name);
+    }
+    throw Error(ErrorCode::InvalidArgument, "compression '" + std::string(name) +
+                                                "' is not one of " + quotedList(names, " or "));
+}
+
+bool isLossless(ExrCompression compression, bool half) {
+    switch (compression) {
+        case ExrCompression::Pxr24:
+            return half;
+        case ExrCompression::B44:
+        case ExrCompression::B44a:
+            return !half;
+        case ExrCompression::Dwaa:
+        case ExrCompression::Dwab:
+            return false;
+        default:
+            return true;
+    }
+}
+
 void writeExr(const std::filesystem::path& file, const Image& image) {
+    writeExr(file, image, ExrWriteOptions{});
+}
+
+void writeExr(const std::filesystem::path& file, const Image& image,
+              const ExrWriteOptions& options) {
     // 3 channels are written as R,G,B; 1 channel as Y (the layout's depth and ID files).
     if (image.channels != 3 && image.channels != 1) {
         throw Error(ErrorCode::InvalidArgument,
                     file.string() + ": writeExr needs a 1- or 3-channel image, got " +
                         std::to_string(image.channels) + " channels");
     }
-    writeExrChannels(file, {{&image,
-                             image.channels == 3 ? std::vector<std::string>{"R", "G", "B"}
-                                                 : std::vector<std::string>{"Y"},
-                             false}});
+    if (image.width <= 0 || image.height <= 0 ||
+        image.pixels.size() != image.pixelCount() * image.channels) {
+        throw Error(ErrorCode::InvalidArgument,
+                    file.string() + ": writeExr got an empty or inconsistent image (" +
+                        std::to_string(image.width) + "x" + std::to_string(image.height) + ")");
+    }
+    const Imf::Compression compression = entryOf(options.compression).imf;
+    static const char* const rgb[] = {"R", "G", "B"};
+    static const char* const gray[] = {"Y"};
+    const char* const* names = image.channels == 3 ? rgb : gray;
+    Imf::Header header(image.width, image.height, 1.0f, Imath::V2f(0, 0), 1.0f, Imf::INCREASING_Y,
+                       compression);
+    const Imf::PixelType fileType = options.half ? Imf::HALF : Imf::FLOAT;
+    for (int c = 0; c < image.channels; ++c) {
+        header.channels().insert(names[c], Imf::Channel(fileType));
+    }
+    if (compression == Imf::NO_COMPRESSION) {
+        writeFileAtomically(
+            file, io_detail::uncompressedExrBytes(header, image, {names, names + image.channels}));
+        return;
+    }
+    io_detail::requireParentFolder(file);
+    io_detail::TemporaryFile temporary(io_detail::temporaryPathFor(file));
+    try {
+        // OpenEXR's writer does not convert FLOAT to HALF: the halves (rounded to nearest even)
+        // are made here.
+        std::vector<half> halves;
+        if (options.half) halves.assign(image.pixels.begin(), image.pixels.end());
+        const char* base = options.half ? reinterpret_cast<const char*>(halves.data())
+                                        : reinterpret_cast<const char*>(image.pixels.data());
+        const std::size_t valueBytes = options.half ? sizeof(half) : sizeof(float);
+        const std::size_t xStride = valueBytes * image.channels;
+        const std::size_t yStride = xStride * image.width;
+        Imf::FrameBuffer frameBuffer;
+        for (int c = 0; c < image.channels; ++c) {
+            // OpenEXR's Slice takes a mutable pointer but only reads from it when writing.
+            frameBuffer.insert(
+                names[c],
+                Imf::Slice(fileType, const_cast<char*>(base + c * valueBytes), xStride, yStride));
+        }
+        {
+            Imf::OutputFile output(temporary.path().c_str(), header, Imf::globalThreadCount());
+            output.setFrameBuffer(frameBuffer);
+            output.writePixels(image.height);
+        }  // the destructor finishes the file before the rename
+    } catch (const std::exception& e) {
+        throw Error(ErrorCode::IoFailure, file.string() + ": cannot write: " + e.what());
+    }
+    temporary.commitTo(file);
 }
 
 void writeExrChannels(const std::filesystem::path& file,
