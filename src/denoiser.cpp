@@ -171,7 +171,7 @@ struct Denoiser::Impl {
         pipeline.allocate(*device, w, h);
         for (auto* in : {&inBeauty, &inNormal, &inPosition, &inDepth, &inId, &inAlbedo, &inMotion})
             *in = InputBuffer{};
-        stageOutput = DeviceBuffer<float>(*device, 3 * pixels());
+        stageOutput = DeviceBuffer<float>();  // made at the first frame that needs it
         hasHistory = false;
     }
 
@@ -297,6 +297,9 @@ struct Denoiser::Impl {
         const bool packedRgb = out.type == DataType::Float32 && out.channels == 3 &&
                                outPixelStride == 12 && outRowStride == std::size_t(f.width) * 12 &&
                                reinterpret_cast<std::uintptr_t>(out.data) % 4 == 0;
+        const bool inPlace = direct && packedRgb;
+        if (!inPlace && stageOutput.size() < 3 * pixels())
+            stageOutput = DeviceBuffer<float>(*device, 3 * pixels());
         auto floats = [](const InputBuffer& b) { return static_cast<const float*>(b.device); };
         FrameBinding frame{
             floats(inBeauty),
@@ -309,7 +312,7 @@ struct Denoiser::Impl {
             f.objectCount,
             objects.data(),
             hasHistory ? 1 : 0,
-            direct && packedRgb ? static_cast<float*>(out.data) : stageOutput.data()};
+            inPlace ? static_cast<float*>(out.data) : stageOutput.data()};
         // Each pass's time from device timestamps: one wait for the whole frame, not one per
         // pass (on a GPU a wait costs about as much as a small kernel).
         pipeline.run(*device, frame);
