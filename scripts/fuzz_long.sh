@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the libFuzzer targets long, one after another (the fuzz preset's build; it is configured
 # and built first): scripts/fuzz_long.sh [-n RUNS | -t SECONDS] [TARGET...]
-# Default: 10000000 inputs per target, every target (fuzz_exr fuzz_frame fuzz_matrix
+# Default: 10000000 inputs per target, every target (fuzz_exr fuzz_frame fuzz_matrix fuzz_blender
 # fuzz_config). Each runs at nice 10 over a corpus in build/fuzz/long/<target> (seeded from
 # tests/fuzz/corpus, kept between runs); findings go to build/fuzz/long/artifacts/. Prints per
 # target the inputs run, the time and the inputs per second, and a line per finding.
@@ -17,8 +17,8 @@ while getopts "n:t:" opt; do
 done
 shift $((OPTIND - 1))
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(fuzz_exr fuzz_frame fuzz_matrix fuzz_config)
-declare -A corpus=([fuzz_exr]=exr [fuzz_frame]=frame [fuzz_matrix]=matrix [fuzz_config]=config)
+[ ${#targets[@]} -eq 0 ] && targets=(fuzz_exr fuzz_frame fuzz_matrix fuzz_blender fuzz_config)
+declare -A corpus=([fuzz_exr]=exr [fuzz_frame]=frame [fuzz_matrix]=matrix [fuzz_blender]=blender [fuzz_config]=config)
 
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$(nproc)" --target "${targets[@]}"

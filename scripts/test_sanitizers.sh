@@ -17,5 +17,5 @@ cmake --build --preset debug -j "$jobs"
 ctest --preset debug -j "$jobs"
 
 cmake --preset fuzz
-cmake --build --preset fuzz -j "$jobs" --target fuzz_exr fuzz_frame fuzz_matrix fuzz_config
+cmake --build --preset fuzz -j "$jobs" --target fuzz_exr fuzz_frame fuzz_matrix fuzz_blender fuzz_config
 ctest --preset fuzz
