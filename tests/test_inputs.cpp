@@ -127,17 +127,18 @@ TEST(Half, ConversionRoundsToNearestEvenAndKeepsSpecialValues) {
         if ((h & 0x7c00) != 0x7c00) EXPECT_EQ(floatToHalf(halfToFloat(std::uint16_t(h))), h);
 }
 
-// RGBA half buffers with pixel and row padding, float IDs, float RGBA: each gives the result of
-// the packed float path on the same values (the half ones rounded), bit for bit.
+// RGBA half buffers with pixel and row padding, float IDs, float RGBA, strided motion: each gives
+// the result of the packed float path on the same values (the half ones rounded), bit for bit.
 TEST(FrameLayouts, EachFormatGivesThePackedFloatResult) {
-    const std::vector<Frame>& frames = cameraPanFrames();
+    // With 2-channel motion vectors in place of the matrices, as an engine passes them.
+    const std::vector<Frame> frames = withMotion(cameraPanFrames(), 2);
     const int w = frames[0].width(), h = frames[0].height();
     for (DataType type : {DataType::Float32, DataType::Float16}) {
         Denoiser packed(test::cpuSettings(Method::Svgf)), laidOut(test::cpuSettings(Method::Svgf));
         for (const Frame& original : frames) {
             Frame f = original;
             if (type == DataType::Float16)
-                for (Image* image : {&f.beauty, &f.normal, &f.position, &f.depth})
+                for (Image* image : {&f.beauty, &f.normal, &f.position, &f.depth, &*f.motion})
                     image->pixels = halfRounded(image->pixels);
             f.albedo = f.beauty;  // any positive image: the demodulation path runs
             for (float& v : f.albedo->pixels) v = 0.25f + 0.5f * std::fabs(v) / (1.0f + v);
@@ -151,7 +152,9 @@ TEST(FrameLayouts, EachFormatGivesThePackedFloatResult) {
             Strided albedo = strided(f.albedo->pixels, w, h, 3, type, 4, 0, 0);
             std::vector<float> ids(f.objectId.begin(), f.objectId.end());
             Strided idFloats = strided(ids, w, h, 1, DataType::Float32, 1, 4, 0);
+            Strided motion = strided(f.motion->pixels, w, h, 2, type, 2, 4, 8);
             FrameView v = viewOf(f);
+            v.motion = motion.view;
             v.beauty = beauty.view;
             v.normal = normal.view;
             v.position = position.view;
