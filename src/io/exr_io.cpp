@@ -371,6 +371,11 @@ void setExrThreads(int count) {
     Imf::setGlobalThreadCount(count < 0 ? 0 : count);
 }
 
+namespace {
+std::vector<Image> readImagesWithOpenExr(const std::filesystem::path& file,
+                                         const std::vector<ChannelChoices>& images);
+}  // namespace
+
 Image io_detail::readExrWithOpenExr(const std::filesystem::path& file,
                                     const ChannelChoices& channelChoices) {
     return std::move(readExrImages(file, {channelChoices}).front());
@@ -383,13 +388,21 @@ Image readExr(const std::filesystem::path& file, const ChannelChoices& channelCh
     checkClaimedSize(file);
     if (std::optional<Image> image = io_detail::readExrBlocks(file, channelChoices))
         return std::move(*image);
-    return std::move(readExrImages(file, {channelChoices}).front());
+    return std::move(readImagesWithOpenExr(file, {channelChoices}).front());
 }
 
 std::vector<Image> readExrImages(const std::filesystem::path& file,
                                  const std::vector<ChannelChoices>& images) {
     requireReadableFile(file, images);
     checkClaimedSize(file);
+    return readImagesWithOpenExr(file, images);
+}
+
+namespace {
+
+// readExrImages' reading, after its checks (readExr's fallback has made them already).
+std::vector<Image> readImagesWithOpenExr(const std::filesystem::path& file,
+                                         const std::vector<ChannelChoices>& images) {
     try {
         Imf::InputFile input(file.c_str(), Imf::globalThreadCount());
         const Imf::Header& header = input.header();
@@ -450,8 +463,6 @@ std::vector<Image> readExrImages(const std::filesystem::path& file,
         throw Error(ErrorCode::IoFailure, file.string() + ": " + e.what());
     }
 }
-
-namespace {
 
 struct CompressionName {
     ExrCompression compression;
