@@ -14,7 +14,7 @@
 #include "baseline_jbf.h"
 #include "core/frame_order.h"
 #include "rtdenoise/io.h"
-#include "rtdenoise/rtdenoise.h"
+#include "rtdenoise/rtdenoise.hpp"
 #include "tuning.h"
 
 namespace {

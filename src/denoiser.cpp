@@ -139,9 +139,39 @@ struct InputBuffer {
     InputSpan span;  // the caller's layout, as the device reads it (staged or not)
 };
 
+struct ComputeDevice::Impl {
+    std::shared_ptr<DeviceContext> context;
+    std::string name;
+};
+
+ComputeDevice::ComputeDevice(DeviceType type) : impl_(std::make_shared<Impl>()) {
+    impl_->context = createDeviceContext(type);
+    impl_->name = createDevice(impl_->context)->name();
+}
+
+ComputeDevice ComputeDevice::fromCudaStream(void* stream) {
+    ComputeDevice device(DeviceType::Cpu);
+    device.impl_->context = createDeviceContext(DeviceType::Cuda, true, stream);
+    device.impl_->name = createDevice(device.impl_->context)->name();
+    return device;
+}
+
+DeviceType ComputeDevice::type() const {
+    return impl_->context->type;
+}
+std::string ComputeDevice::name() const {
+    return impl_->name;
+}
+void ComputeDevice::synchronize() {
+    // Any of the context's devices waits on the shared stream; a CPU device has nothing queued.
+    if (impl_->context->type == DeviceType::Cuda) createDevice(impl_->context)->synchronize();
+}
+
 struct Denoiser::Impl {
     DenoiserSettings settings;
+    std::shared_ptr<DeviceContext> context;  // shared with the ComputeDevice, if any
     std::unique_ptr<Device> device;
+    int queuedFrames = 0;  // frames queued without a wait since the last synchronize()
     Pipeline pipeline;
     FrameImages images;
     FrameStats stats;
@@ -157,9 +187,12 @@ struct Denoiser::Impl {
     // Per frame: the caller's buffers as the device sees them.
     InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo, inMotion;
 
-    Impl(const DenoiserSettings& s, const DeviceTuning& tuning) : settings(s) {
+    Impl(const DenoiserSettings& s, const DeviceTuning& tuning,
+         std::shared_ptr<DeviceContext> sharedContext)
+        : settings(s), context(std::move(sharedContext)) {
         validate(settings);
-        device = createDevice(settings.device, tuning.cpuIsa, tuning.tilePasses);
+        if (!context) context = createDeviceContext(settings.device);
+        device = createDevice(context, tuning.cpuIsa, tuning.tilePasses);
         images = declareMethod(pipeline, settings);
         stats.passMilliseconds.assign(pipeline.passes().size(), 0.0);
     }
@@ -236,7 +269,8 @@ struct Denoiser::Impl {
                                  static_cast<float*>(const_cast<void*>(inDepth.device))};
             device->run(convert);
         }
-        device->synchronize();
+        // Host buffers: their upload is timed. Device buffers: nothing to wait for.
+        if (f.space == MemorySpace::Host) device->synchronize();
     }
 
     // One matrix per object: current world -> object -> previous world (-> previous screen).
@@ -314,21 +348,22 @@ struct Denoiser::Impl {
             hasHistory ? 1 : 0,
             inPlace ? static_cast<float*>(out.data) : stageOutput.data()};
         // Each pass's time from device timestamps: one wait for the whole frame, not one per
-        // pass (on a GPU a wait costs about as much as a small kernel).
+        // pass (on a GPU a wait costs about as much as a small kernel). A frame of device
+        // buffers on a GPU is only queued: its times and flags are read at synchronize().
         pipeline.run(*device, frame);
-        device->synchronize();
-        const std::size_t passes = pipeline.passes().size();
-        for (std::size_t p = 0; p < passes; ++p)
-            stats.passMilliseconds[p] = device->millisecondsBetween(int(p), int(p) + 1);
-        stats.deviceMilliseconds = device->millisecondsBetween(0, int(passes));
-        Device::InputFlagCounts flags =
-            device->countInputFlags(pipeline.frameBytes(images.inputFlags), pixels());
-        stats.nonFiniteReplaced = flags.nonFinite;
-        stats.radianceClamped = flags.clamped;
-        stats.missingNormals = flags.missingNormals;
-        // Bad IDs were read as background; the frame is refused (before it becomes history),
-        // naming the first such pixel.
-        if (flags.badObjectIds > 0) throwBadObjectId(f);
+        const bool queueOnly = f.space == MemorySpace::Device && device->queuesWork();
+        if (queueOnly) {
+            device->queueInputFlagCount(pipeline.frameBytes(images.inputFlags), pixels());
+        } else {
+            device->synchronize();
+            readTimes();
+            Device::InputFlagCounts flags =
+                device->countInputFlags(pipeline.frameBytes(images.inputFlags), pixels());
+            noteFlags(flags);
+            // Bad IDs were read as background; the frame is refused (before it becomes
+            // history), naming the first such pixel.
+            if (flags.badObjectIds > 0) throwBadObjectId(f);
+        }
 
         start = Clock::now();
         WriteOutputKernel write{stageOutput.data(),
@@ -354,8 +389,12 @@ struct Denoiser::Impl {
             for (int y = 0; y < f.height; ++y)
                 for (int x = 0; x < f.width; ++x) write(x, y);
         }
-        device->synchronize();
-        stats.downloadMilliseconds = millisecondsSince(start);
+        if (queueOnly) {
+            ++queuedFrames;
+        } else {
+            device->synchronize();
+            stats.downloadMilliseconds = millisecondsSince(start);
+        }
 
         // This frame's geometry and output are the next frame's history.
         if (f.motion)
@@ -365,6 +404,39 @@ struct Denoiser::Impl {
         previousWorldToScreen = f.worldToScreen;
         hasHistory = temporal;
         pipeline.endFrame();
+    }
+
+    void readTimes() {
+        const std::size_t passes = pipeline.passes().size();
+        for (std::size_t p = 0; p < passes; ++p)
+            stats.passMilliseconds[p] = device->millisecondsBetween(int(p), int(p) + 1);
+        stats.deviceMilliseconds = device->millisecondsBetween(0, int(passes));
+    }
+
+    void noteFlags(const Device::InputFlagCounts& flags) {
+        stats.nonFiniteReplaced = flags.nonFinite;
+        stats.radianceClamped = flags.clamped;
+        stats.missingNormals = flags.missingNormals;
+    }
+
+    // The queued frames' statistics (the last one's times, all their flags summed).
+    void synchronize() {
+        device->synchronize();
+        if (queuedFrames == 0) return;
+        const int frames = queuedFrames;
+        queuedFrames = 0;
+        readTimes();
+        stats.uploadMilliseconds = stats.downloadMilliseconds = 0.0;
+        Device::InputFlagCounts flags = device->takeQueuedInputFlags();
+        noteFlags(flags);
+        if (flags.badObjectIds > 0) {
+            hasHistory = false;  // a frame with IDs read as background became history
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("frame: {} pixels of the last {} queued frames held an object "
+                                    "ID outside -1..objectCount-1 (read as background; the "
+                                    "history is reset)",
+                                    flags.badObjectIds, frames));
+        }
     }
 
     void checkView(const FrameView& f, const OutputView& out) const {
@@ -409,8 +481,12 @@ struct Denoiser::Impl {
 };
 
 Denoiser::Denoiser(const DenoiserSettings& settings) : Denoiser(settings, DeviceTuning{}) {}
-Denoiser::Denoiser(const DenoiserSettings& settings, const DeviceTuning& tuning)
-    : impl_(std::make_unique<Impl>(settings, tuning)) {}
+Denoiser::Denoiser(const DenoiserSettings& settings, const ComputeDevice& device)
+    : Denoiser(settings, DeviceTuning{}, &device) {}
+Denoiser::Denoiser(const DenoiserSettings& settings, const DeviceTuning& tuning,
+                   const ComputeDevice* device)
+    : impl_(std::make_unique<Impl>(settings, tuning,
+                                   device ? device->impl_->context : nullptr)) {}
 Denoiser makeTunedDenoiser(const DenoiserSettings& settings, const DeviceTuning& tuning) {
     return Denoiser(settings, tuning);
 }
@@ -434,6 +510,10 @@ void Denoiser::processFrame(const FrameView& frame, float* outputRgb) {
 
 void Denoiser::processFrame(const FrameView& frame, const OutputView& output) {
     impl_->process(frame, output);
+}
+
+void Denoiser::synchronize() {
+    impl_->synchronize();
 }
 
 void Denoiser::reset() {

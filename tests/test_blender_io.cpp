@@ -18,7 +18,7 @@
 #include "metrics/metrics.h"
 #include "render/render_sequence.h"
 #include "rtdenoise/io.h"
-#include "rtdenoise/rtdenoise.h"
+#include "rtdenoise/rtdenoise.hpp"
 #include "test_support.h"
 
 namespace fs = std::filesystem;

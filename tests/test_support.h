@@ -17,7 +17,7 @@
 
 #include "render/render_sequence.h"
 #include "rtdenoise/io.h"
-#include "rtdenoise/rtdenoise.h"
+#include "rtdenoise/rtdenoise.hpp"
 
 namespace rtd::test {
 

@@ -15,7 +15,7 @@
 #include "core/frame_order.h"
 #include "render/render_sequence.h"
 #include "rtdenoise/io.h"
-#include "rtdenoise/rtdenoise.h"
+#include "rtdenoise/rtdenoise.hpp"
 
 namespace fs = std::filesystem;
 

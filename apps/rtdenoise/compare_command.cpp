@@ -18,7 +18,7 @@
 #include "metrics/metrics.h"
 #include "progress.h"
 #include "rtdenoise/io.h"
-#include "rtdenoise/rtdenoise.h"
+#include "rtdenoise/rtdenoise.hpp"
 
 namespace fs = std::filesystem;
 

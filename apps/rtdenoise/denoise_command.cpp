@@ -19,7 +19,7 @@
 #include "commands.h"
 #include "progress.h"
 #include "rtdenoise/io.h"
-#include "rtdenoise/rtdenoise.h"
+#include "rtdenoise/rtdenoise.hpp"
 
 namespace fs = std::filesystem;
 

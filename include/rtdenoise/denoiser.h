@@ -42,9 +42,34 @@ enum class DebugView {
     HistoryLength,  // svgf: frames accumulated per pixel, grey = length / max history
 };
 
+// Where denoisers run, shared by several of them (as OIDN's device): on a GPU one CUDA stream
+// (the caller's, or one of its own) and one set of pinned staging buffers for them all. Copies
+// share the state; it lives as long as its last copy or denoiser.
+class ComputeDevice {
+  public:
+    // Throws rtd::Error(DeviceFailure) if `type` is not available (Auto: a GPU, else the CPU).
+    explicit ComputeDevice(DeviceType type = DeviceType::Auto);
+    // A CUDA device queuing its work on the caller's `stream` (a cudaStream_t; nullptr: the
+    // default stream), after the caller's own work there.
+    static ComputeDevice fromCudaStream(void* stream);
+
+    DeviceType type() const;  // Cpu or Cuda
+    std::string name() const;
+    // Waits for all work queued on the device (its denoisers' and, on a caller's stream,
+    // the caller's).
+    void synchronize();
+
+  private:
+    friend class Denoiser;
+    struct Impl;
+    std::shared_ptr<Impl> impl_;
+};
+
 class Denoiser {
   public:
     explicit Denoiser(const DenoiserSettings& settings = {});
+    // On a shared device (settings.device is not used).
+    Denoiser(const DenoiserSettings& settings, const ComputeDevice& device);
     ~Denoiser();
     Denoiser(Denoiser&&) noexcept;
     Denoiser& operator=(Denoiser&&) noexcept;
@@ -59,7 +84,13 @@ class Denoiser {
     // are the caller's to get right; IDs are checked in either space (the ingest flags them).
     void processFrame(const FrameView& frame, float* outputRgb);
     // Same, the result in the caller's layout (float or half, 3 or 4 channels, strides).
+    // On a GPU with device-memory buffers (MemorySpace::Device) it only queues the work on the
+    // device's stream: the output is complete, and the frame's statistics and ID check are
+    // known, after synchronize().
     void processFrame(const FrameView& frame, const OutputView& output);
+    // Waits for this denoiser's queued frames; throws rtd::Error(InvalidInput) if one of them
+    // held an object ID out of range (read as background: the history is then reset).
+    void synchronize();
 
     // Forgets the history (e.g. at a camera cut).
     void reset();
@@ -78,7 +109,8 @@ class Denoiser {
 
   private:
     friend Denoiser makeTunedDenoiser(const DenoiserSettings&, const DeviceTuning&);
-    Denoiser(const DenoiserSettings& settings, const DeviceTuning& tuning);
+    Denoiser(const DenoiserSettings& settings, const DeviceTuning& tuning,
+             const ComputeDevice* device = nullptr);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -34,6 +34,36 @@ std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa, TilePasses 
     throw Error(ErrorCode::InvalidArgument, "unknown device type");
 }
 
+std::shared_ptr<DeviceContext> createDeviceContext(DeviceType type, bool callerStream,
+                                                   void* cudaStream) {
+#if RTD_HAS_CUDA
+    if (type == DeviceType::Cuda || callerStream ||
+        (type == DeviceType::Auto && cudaDeviceAvailable()))
+        return createCudaContext(callerStream, cudaStream);
+#else
+    (void)cudaStream;
+    if (type == DeviceType::Cuda || callerStream)
+        throw Error(ErrorCode::DeviceFailure,
+                    "cuda: this build has no CUDA back end (nvcc was not found when it was "
+                    "configured); use the cpu device");
+#endif
+    return std::make_shared<DeviceContext>();
+}
+
+std::unique_ptr<Device> createDevice(const std::shared_ptr<DeviceContext>& context, CpuIsa cpuIsa,
+                                     TilePasses tilePasses) {
+#if RTD_HAS_CUDA
+    if (context->type == DeviceType::Cuda) return createCudaDevice(context, tilePasses);
+#endif
+    return createCpuDevice(cpuIsa, tilePasses);
+}
+
+#if !RTD_HAS_CUDA
+bool isCudaDeviceMemory(const void*) {
+    return false;
+}
+#endif
+
 void parallelCopy(void* dst, const void* src, std::size_t bytes) {
     constexpr std::size_t kPiece = std::size_t(1) << 20;  // 1 MiB per task
     const long pieces = long((bytes + kPiece - 1) / kPiece);

@@ -13,10 +13,20 @@
 
 namespace rtd {
 
+// What the Devices of one ComputeDevice share (on CUDA: the stream and the pinned staging). The
+// CPU's holds nothing: each denoiser's Device has its own working memory.
+struct DeviceContext {
+    virtual ~DeviceContext() = default;
+    DeviceType type = DeviceType::Cpu;  // Cpu or Cuda
+};
+
 class Device {
   public:
     virtual ~Device() = default;
     virtual std::string name() const = 0;
+    // True if work is queued and runs after the calls return (a GPU), false if each call
+    // returns with its work done (the CPU).
+    virtual bool queuesWork() const { return false; }
     // True if kernels can read and write host memory directly (no staging copies needed).
     virtual bool sharesHostMemory() const = 0;
 
@@ -42,6 +52,16 @@ class Device {
         long long missingNormals = 0;
     };
     virtual InputFlagCounts countInputFlags(const std::uint8_t* deviceFlags, std::size_t n) = 0;
+    // The same without a wait: the counts add up on the device until takeQueuedInputFlags()
+    // (after a synchronize()) reads and clears them.
+    virtual void queueInputFlagCount(const std::uint8_t* deviceFlags, std::size_t n) {
+        queued_ = add(queued_, countInputFlags(deviceFlags, n));
+    }
+    virtual InputFlagCounts takeQueuedInputFlags() {
+        InputFlagCounts taken = queued_;
+        queued_ = {};
+        return taken;
+    }
 
     // The logical kernels (steps.h), each over the frame's pixels in this device's form.
     virtual void run(const IngestStep& step) = 0;
@@ -69,7 +89,15 @@ class Device {
     }
 
   private:
+    static InputFlagCounts add(InputFlagCounts a, const InputFlagCounts& b) {
+        a.nonFinite += b.nonFinite;
+        a.badObjectIds += b.badObjectIds;
+        a.clamped += b.clamped;
+        a.missingNormals += b.missingNormals;
+        return a;
+    }
     std::size_t allocatedBytes_ = 0;
+    InputFlagCounts queued_;
 };
 
 // memcpy on every core (OpenMP), for host-side staging copies of whole frames.
@@ -81,9 +109,22 @@ std::unique_ptr<Device> createDevice(DeviceType type, CpuIsa cpuIsa = CpuIsa::Au
                                      TilePasses tilePasses = TilePasses::Auto);
 std::unique_ptr<Device> createCpuDevice(CpuIsa isa = CpuIsa::Auto,
                                         TilePasses tilePasses = TilePasses::Auto);
-// Only in builds with the CUDA back end (RTD_HAS_CUDA); throws if no GPU is present.
+// A context for `type` (Auto: CUDA when a GPU is there). callerStream: CUDA only, queue on
+// `cudaStream` (a cudaStream_t, null: the default stream) instead of a stream of its own.
+std::shared_ptr<DeviceContext> createDeviceContext(DeviceType type, bool callerStream = false,
+                                                   void* cudaStream = nullptr);
+// A Device on `context` (each Denoiser has its own; they share the context's stream).
+std::unique_ptr<Device> createDevice(const std::shared_ptr<DeviceContext>& context,
+                                     CpuIsa cpuIsa = CpuIsa::Auto,
+                                     TilePasses tilePasses = TilePasses::Auto);
+// Only in builds with the CUDA back end (RTD_HAS_CUDA); throw if no GPU is present.
 std::unique_ptr<Device> createCudaDevice(TilePasses tilePasses = TilePasses::Auto);
+std::shared_ptr<DeviceContext> createCudaContext(bool callerStream, void* stream);
+std::unique_ptr<Device> createCudaDevice(const std::shared_ptr<DeviceContext>& context,
+                                         TilePasses tilePasses);
 bool cudaDeviceAvailable();
+// Whether `pointer` is GPU memory (cudaMalloc or managed); false in a build without CUDA.
+bool isCudaDeviceMemory(const void* pointer);
 
 // An array of T in a device's memory, freed with its owner.
 template <class T>

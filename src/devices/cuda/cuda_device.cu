@@ -162,32 +162,81 @@ __global__ void countInputFlagsKernel(const std::uint8_t* flags, std::size_t n,
     if (missingNormals) atomicAdd(&totals[3], missingNormals);
 }
 
+// What every Device made for one ComputeDevice shares: the stream (the caller's, or one made
+// here) and the pinned staging chunks, allocated once per ComputeDevice, not per denoiser.
+class CudaContext final : public DeviceContext {
+  public:
+    static constexpr std::size_t kStageChunk = std::size_t(8) << 20;
+    static constexpr int kStageSlots = 3;
+
+    CudaContext(bool callerStream, cudaStream_t stream) {
+        type = DeviceType::Cuda;
+        check(cudaGetDevice(&device), "cudaGetDevice");
+        cudaDeviceProp properties{};
+        check(cudaGetDeviceProperties(&properties, device), "cudaGetDeviceProperties");
+        name = std::string("cuda (") + properties.name + ")";
+        ownsStream_ = !callerStream;
+        if (callerStream)
+            this->stream = stream;
+        else
+            check(cudaStreamCreateWithFlags(&this->stream, cudaStreamNonBlocking),
+                  "cudaStreamCreate");
+    }
+    ~CudaContext() override {
+        cudaStreamSynchronize(stream);
+        // Only what was made: destroying a null event would leave an error for the next
+        // launch's check to report (in another Denoiser on this thread).
+        for (int k = 0; k < kStageSlots; ++k) {
+            if (stageFree[k]) cudaEventDestroy(stageFree[k]);
+            if (stage[k]) cudaFreeHost(stage[k]);
+        }
+        if (ownsStream_) cudaStreamDestroy(stream);
+    }
+    // Once, at the first large copy (24 MiB of pinned host memory).
+    void allocateStaging() {
+        if (stage[0]) return;
+        for (int k = 0; k < kStageSlots; ++k) {
+            check(cudaHostAlloc(&stage[k], kStageChunk, cudaHostAllocDefault), "cudaHostAlloc");
+            check(cudaEventCreateWithFlags(&stageFree[k], cudaEventDisableTiming),
+                  "cudaEventCreate");
+        }
+    }
+
+    int device = 0;
+    std::string name;
+    cudaStream_t stream = nullptr;
+    void* stage[kStageSlots] = {};
+    cudaEvent_t stageFree[kStageSlots] = {};
+    int nextStage = 0;
+
+  private:
+    bool ownsStream_ = true;
+};
+
 class CudaDevice final : public Device {
   public:
-    explicit CudaDevice(TilePasses tilePasses) : tiles_(tilePasses == TilePasses::On) {
-        check(cudaGetDevice(&device_), "cudaGetDevice");
-        cudaDeviceProp properties{};
-        check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
-        name_ = std::string("cuda (") + properties.name + ")";
-        check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
-        check(cudaMalloc(&counters_, kInputFlagCounters * sizeof(unsigned long long)),
+    CudaDevice(std::shared_ptr<CudaContext> context, TilePasses tilePasses)
+        : tiles_(tilePasses == TilePasses::On),
+          context_(std::move(context)),
+          stream_(context_->stream),
+          stage_(context_->stage),
+          stageFree_(context_->stageFree),
+          nextStage_(context_->nextStage) {
+        check(cudaMalloc(&counters_, 2 * kInputFlagCounters * sizeof(unsigned long long)),
               "cudaMalloc");
+        check(cudaMemsetAsync(counters_, 0, 2 * kInputFlagCounters * sizeof(unsigned long long),
+                              stream_),
+              "memset");
         for (cudaEvent_t& e : events_) check(cudaEventCreate(&e), "cudaEventCreate");
     }
     ~CudaDevice() override {
         cudaStreamSynchronize(stream_);
-        // Only what was made: destroying a null event would leave an error for the next
-        // launch's check to report (in another Denoiser on this thread).
-        for (int k = 0; k < kStageSlots; ++k) {
-            if (stageFree_[k]) cudaEventDestroy(stageFree_[k]);
-            if (stage_[k]) cudaFreeHost(stage_[k]);
-        }
         for (cudaEvent_t e : events_) cudaEventDestroy(e);
         cudaFree(counters_);
-        cudaStreamDestroy(stream_);
     }
 
-    std::string name() const override { return name_; }
+    std::string name() const override { return context_->name; }
+    bool queuesWork() const override { return true; }
     bool sharesHostMemory() const override { return false; }
 
     // SVGF's guide interleaved (one 16-byte load per tap): its steps have that form here. The
@@ -341,6 +390,19 @@ class CudaDevice final : public Device {
                 static_cast<long long>(totals[2]), static_cast<long long>(totals[3])};
     }
 
+    // Queued frames' flags add up in the second half of counters_ until takeQueuedInputFlags().
+    void queueInputFlagCount(const std::uint8_t* flags, std::size_t n) override {
+        countInputFlagsKernel<<<256, 256, 0, stream_>>>(flags, n, counters_ + kInputFlagCounters);
+        check(cudaGetLastError(), "countInputFlags");
+    }
+    InputFlagCounts takeQueuedInputFlags() override {
+        unsigned long long totals[kInputFlagCounters] = {};
+        copyToHost(totals, counters_ + kInputFlagCounters, sizeof totals);
+        check(cudaMemsetAsync(counters_ + kInputFlagCounters, 0, sizeof totals, stream_), "memset");
+        return {static_cast<long long>(totals[0]), static_cast<long long>(totals[1]),
+                static_cast<long long>(totals[2]), static_cast<long long>(totals[3])};
+    }
+
   private:
     template <class Kernel>
     void launch(const Kernel& kernel) {
@@ -380,29 +442,19 @@ class CudaDevice final : public Device {
         }
     }
 
-    static constexpr std::size_t kStageChunk = std::size_t(8) << 20;
-    static constexpr int kStageSlots = 3;
-
-    // Once, at the first large copy (24 MiB of pinned host memory).
-    void allocateStaging() {
-        if (stage_[0]) return;
-        for (int k = 0; k < kStageSlots; ++k) {
-            check(cudaHostAlloc(&stage_[k], kStageChunk, cudaHostAllocDefault), "cudaHostAlloc");
-            check(cudaEventCreateWithFlags(&stageFree_[k], cudaEventDisableTiming),
-                  "cudaEventCreate");
-        }
-    }
+    static constexpr std::size_t kStageChunk = CudaContext::kStageChunk;
+    static constexpr int kStageSlots = CudaContext::kStageSlots;
+    void allocateStaging() { context_->allocateStaging(); }
 
     bool tiles_;  // the firefly removal as one tile pass (a tuning for comparisons)
     bool interleaved_ = false;
     Layout layout_;
-    void* stage_[kStageSlots] = {};
-    cudaEvent_t stageFree_[kStageSlots] = {};
-    int nextStage_ = 0;
-    int device_ = 0;
-    std::string name_;
-    cudaStream_t stream_ = nullptr;
-    unsigned long long* counters_ = nullptr;
+    std::shared_ptr<CudaContext> context_;
+    cudaStream_t stream_;
+    void* (&stage_)[kStageSlots];
+    cudaEvent_t (&stageFree_)[kStageSlots];
+    int& nextStage_;
+    unsigned long long* counters_ = nullptr;  // this frame's flag counts, then the queued ones'
     cudaEvent_t events_[kTimestampSlots] = {};
 };
 
@@ -413,11 +465,31 @@ bool cudaDeviceAvailable() {
     return cudaGetDeviceCount(&count) == cudaSuccess && count > 0;
 }
 
-std::unique_ptr<Device> createCudaDevice(TilePasses tilePasses) {
+std::shared_ptr<DeviceContext> createCudaContext(bool callerStream, void* stream) {
     if (!cudaDeviceAvailable())
         throw Error(ErrorCode::DeviceFailure,
                     "--device cuda: no CUDA GPU is available (driver missing or no device)");
-    return std::make_unique<CudaDevice>(tilePasses);
+    return std::make_shared<CudaContext>(callerStream, static_cast<cudaStream_t>(stream));
+}
+
+std::unique_ptr<Device> createCudaDevice(const std::shared_ptr<DeviceContext>& context,
+                                         TilePasses tilePasses) {
+    auto cuda = std::dynamic_pointer_cast<CudaContext>(context);
+    if (!cuda) throw Error(ErrorCode::DeviceFailure, "not a CUDA device context");
+    return std::make_unique<CudaDevice>(std::move(cuda), tilePasses);
+}
+
+std::unique_ptr<Device> createCudaDevice(TilePasses tilePasses) {
+    return createCudaDevice(createCudaContext(false, nullptr), tilePasses);
+}
+
+bool isCudaDeviceMemory(const void* pointer) {
+    cudaPointerAttributes attributes{};
+    if (cudaPointerGetAttributes(&attributes, pointer) != cudaSuccess) {
+        cudaGetLastError();  // not an error to report later: host memory on older drivers
+        return false;
+    }
+    return attributes.type == cudaMemoryTypeDevice || attributes.type == cudaMemoryTypeManaged;
 }
 
 }  // namespace rtd
