@@ -2,7 +2,11 @@
 # against it with find_package(rtdenoise): examples/consumer (rtdenoise::rtdenoise alone) with
 # OpenEXR and libpng made unfindable, which it must not need, then cmake/io_consumer
 # (COMPONENTS io, rtdenoise::rtdenoise_io).
-#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -P test_install.cmake
+# Then one rendered scene through the installed package three ways, the C API from C
+# (examples/c_consumer), the C++ API (examples/consumer) and Python (cmake/python_consumer.py,
+# where the module was built): the same result.
+#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DPYTHON=...] -P test_install.cmake
+
 file(REMOVE_RECURSE "${WORK_DIR}")
 execute_process(COMMAND ${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${WORK_DIR}/prefix"
                 RESULT_VARIABLE rc OUTPUT_QUIET)
@@ -50,5 +54,63 @@ execute_process(COMMAND "${WORK_DIR}/io_consumer/io_consumer" "${WORK_DIR}"
 message(STATUS "${out}")
 if(NOT rc EQUAL 0 OR NOT out MATCHES "^io ok")
   message(FATAL_ERROR "the io consumer failed (${rc}): ${out}")
+endif()
+
+# ---- one rendered scene, three languages ----
+set(scene "${WORK_DIR}/scene")
+set(packs "${WORK_DIR}/packs")
+file(MAKE_DIRECTORY "${packs}")
+execute_process(COMMAND "${WORK_DIR}/prefix/bin/rtdenoise" render moving-objects -o "${scene}"
+                        --width 64 --height 48 --frames 3 --gbuffer-only -q RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the installed rtdenoise render failed (${rc})")
+endif()
+execute_process(COMMAND "${WORK_DIR}/io_consumer/io_consumer" --pack "${scene}" "${packs}"
+                RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "packing the scene's frames as raw buffers failed (${rc})")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} -S "${SOURCE_DIR}/examples/c_consumer"
+                        -B "${WORK_DIR}/c_consumer" -G Ninja
+                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_C_COMPILER=${C_COMPILER}
+                        "-DCMAKE_C_FLAGS=${C_FLAGS}"
+                RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "configuring the C consumer with find_package(rtdenoise) failed")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} --build "${WORK_DIR}/c_consumer" RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "building the C consumer (C99, the C API) failed")
+endif()
+foreach(consumer c_consumer/c_consumer consumer/consumer)
+  execute_process(COMMAND "${WORK_DIR}/${consumer}" "${packs}" 3 RESULT_VARIABLE rc
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message(STATUS "${out}${err}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${consumer} failed on the rendered scene (${rc})")
+  endif()
+endforeach()
+file(GLOB_RECURSE python_package "${WORK_DIR}/prefix/*__init__.py")
+list(FILTER python_package INCLUDE REGEX "/rtdenoise/__init__\\.py$")
+if(PYTHON AND python_package)
+  list(GET python_package 0 init)
+  get_filename_component(package "${init}" DIRECTORY)
+  get_filename_component(site "${package}" DIRECTORY)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env "PYTHONPATH=${site}"
+                          "${PYTHON}" "${SOURCE_DIR}/cmake/python_consumer.py" "${scene}" "${packs}"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message(STATUS "${out}${err}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "the installed Python module's result differs or it failed (${rc})")
+  endif()
+else()  # no Python module built: C against C++ alone, bit for bit
+  foreach(i 0 1 2)
+    file(SHA256 "${packs}/c_result_${i}.raw" c_hash)
+    file(SHA256 "${packs}/cpp_result_${i}.raw" cpp_hash)
+    if(NOT c_hash STREQUAL cpp_hash)
+      message(FATAL_ERROR "frame ${i}: the C consumer's result differs from the C++ one's")
+    endif()
+  endforeach()
+  message(STATUS "C and C++ results identical (no Python module installed to compare)")
 endif()
 file(REMOVE_RECURSE "${WORK_DIR}")

@@ -3,8 +3,10 @@
 set -euo pipefail
 # libclang-rt-dev: clang's sanitizer and libFuzzer runtimes (the debug and fuzz presets);
 # libdeflate-dev: the EXR reader's faster inflate (optional: zlib without it).
+# python3-dev, python3-numpy, pybind11-dev: the Python module (python/); python3-pytest: its tests.
 packages=(cmake ninja-build clang libclang-rt-dev libomp-dev g++ libopenexr-dev libpng-dev
-          libdeflate-dev libfmt-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg)
+          libdeflate-dev libfmt-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg
+          python3-dev python3-numpy python3-pytest pybind11-dev python3-pybind11)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

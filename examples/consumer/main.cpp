@@ -1,13 +1,65 @@
 // The library from a renderer: hand each frame's radiance and G-buffer to a Denoiser, get the
 // denoised radiance back. Here a flat grey wall with noise, built in memory, stands in for the
 // renderer: rtdenoise::rtdenoise alone, no image files (those are rtdenoise::rtdenoise_io's).
+// `consumer DIR FRAMES` denoises a renderer's raw buffers instead, as examples/c_consumer does.
 #include <rtdenoise/denoiser.h>
 #include <rtdenoise/error.h>
 
+#include <cstdint>
 #include <cstdio>
+#include <fstream>
 #include <random>
+#include <string>
+#include <vector>
 
-int main() {
+// DIR/frame_<i>.raw (examples/c_consumer/main.c's layout) into DIR/cpp_result_<i>.raw with svgf.
+int denoiseRawFrames(const std::string& dir, int frames) {
+    rtd::DenoiserSettings settings;
+    settings.device = rtd::DeviceType::Cpu;
+    rtd::Denoiser denoiser(settings);
+    for (int i = 0; i < frames; ++i) {
+        std::ifstream in(dir + "/frame_" + std::to_string(i) + ".raw", std::ios::binary);
+        std::int32_t size[3] = {};
+        in.read(reinterpret_cast<char*>(size), sizeof size);
+        const std::size_t n = std::size_t(size[0]) * std::size_t(size[1]);
+        std::vector<float> buffer(11 * n + 16 * (std::size_t(size[2]) + 2));
+        in.read(reinterpret_cast<char*>(buffer.data()), std::streamsize(buffer.size() * 4));
+        if (!in) return std::fprintf(stderr, "frame %d: unreadable\n", i), 1;
+        const float* m = buffer.data() + 11 * n;
+        std::vector<rtd::Matrix4> matrices(std::size_t(size[2]) + 2);
+        for (std::size_t k = 0; k < matrices.size(); ++k)
+            for (int e = 0; e < 16; ++e) matrices[k].m[e / 4][e % 4] = m[16 * k + e];
+        rtd::FrameView view;
+        view.width = size[0];
+        view.height = size[1];
+        view.beauty = buffer.data();
+        view.normal = buffer.data() + 3 * n;
+        view.position = buffer.data() + 6 * n;
+        view.depth = buffer.data() + 9 * n;
+        view.objectId = rtd::ImageView(buffer.data() + 10 * n, rtd::DataType::Int32, 1);
+        view.objectCount = size[2];
+        view.objectToWorld = matrices.data();
+        view.worldToCamera = matrices[std::size_t(size[2])];
+        view.worldToScreen = matrices[std::size_t(size[2]) + 1];
+        std::vector<float> output(3 * n);
+        denoiser.processFrame(view, output.data());
+        std::ofstream out(dir + "/cpp_result_" + std::to_string(i) + ".raw", std::ios::binary);
+        out.write(reinterpret_cast<const char*>(output.data()), std::streamsize(output.size() * 4));
+        if (!out) return std::fprintf(stderr, "frame %d: cannot write\n", i), 1;
+    }
+    std::printf("cpp consumer ok, %s\n", denoiser.deviceName().c_str());
+    return 0;
+}
+
+int main(int argc, char** argv) {
+    if (argc == 3) {
+        try {
+            return denoiseRawFrames(argv[1], std::stoi(argv[2]));
+        } catch (const rtd::Error& e) {
+            std::fprintf(stderr, "denoising failed: %s\n", e.what());
+            return 1;
+        }
+    }
     const int width = 64, height = 48;
     rtd::DenoiserSettings settings;
     settings.method = rtd::Method::Temporal;  // filter + back-projection + accumulation
