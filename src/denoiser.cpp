@@ -335,18 +335,17 @@ struct Denoiser::Impl {
         if (!inPlace && stageOutput.size() < 3 * pixels())
             stageOutput = DeviceBuffer<float>(*device, 3 * pixels());
         auto floats = [](const InputBuffer& b) { return static_cast<const float*>(b.device); };
-        FrameBinding frame{
-            floats(inBeauty),
-            floats(inNormal),
-            floats(inPosition),
-            floats(inDepth),
-            static_cast<const std::int32_t*>(inId.device),
-            floats(inAlbedo),
-            inMotion.span,
-            f.objectCount,
-            objects.data(),
-            hasHistory ? 1 : 0,
-            inPlace ? static_cast<float*>(out.data) : stageOutput.data()};
+        FrameBinding frame{floats(inBeauty),
+                           floats(inNormal),
+                           floats(inPosition),
+                           floats(inDepth),
+                           static_cast<const std::int32_t*>(inId.device),
+                           floats(inAlbedo),
+                           inMotion.span,
+                           f.objectCount,
+                           objects.data(),
+                           hasHistory ? 1 : 0,
+                           inPlace ? static_cast<float*>(out.data) : stageOutput.data()};
         // Each pass's time from device timestamps: one wait for the whole frame, not one per
         // pass (on a GPU a wait costs about as much as a small kernel). A frame of device
         // buffers on a GPU is only queued: its times and flags are read at synchronize().
@@ -485,8 +484,7 @@ Denoiser::Denoiser(const DenoiserSettings& settings, const ComputeDevice& device
     : Denoiser(settings, DeviceTuning{}, &device) {}
 Denoiser::Denoiser(const DenoiserSettings& settings, const DeviceTuning& tuning,
                    const ComputeDevice* device)
-    : impl_(std::make_unique<Impl>(settings, tuning,
-                                   device ? device->impl_->context : nullptr)) {}
+    : impl_(std::make_unique<Impl>(settings, tuning, device ? device->impl_->context : nullptr)) {}
 Denoiser makeTunedDenoiser(const DenoiserSettings& settings, const DeviceTuning& tuning) {
     return Denoiser(settings, tuning);
 }

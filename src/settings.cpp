@@ -28,35 +28,35 @@ void validate(const DenoiserSettings& s) {
     requireSigma(s.edges.sigmaColor, "sigma-color");
     requireSigma(s.edges.sigmaNormal, "sigma-normal");
     requireSigma(s.edges.sigmaPlane, "sigma-plane");
-    require(s.jbf.radius >= 0 && s.jbf.radius <= 64, "jbf radius must be in [0, 64]");
+    require(s.jbf.radius >= 0 && s.jbf.radius <= 64, "radius must be in [0, 64]");
     requireSigma(s.jbf.sigmaCoord, "sigma-coord");
-    require(s.atrous.passes >= 1 && s.atrous.passes <= 10, "atrous passes must be in [1, 10]");
-    require(s.outlier.radius >= 1 && s.outlier.radius <= 15, "outlier radius must be in [1, 15]");
-    require(positive(s.outlier.k), "outlier k must be > 0");
+    require(s.atrous.passes >= 1 && s.atrous.passes <= 10, "atrous-passes must be in [1, 10]");
+    require(s.outlier.radius >= 1 && s.outlier.radius <= 15, "outlier-radius must be in [1, 15]");
+    require(positive(s.outlier.k), "outlier-k must be > 0");
     require(std::isfinite(s.temporal.alpha) && s.temporal.alpha >= 0.0f && s.temporal.alpha <= 1.0f,
             "alpha must be in [0, 1]");
-    require(positive(s.temporal.clampK), "clamp k must be > 0");
+    require(positive(s.temporal.clampK), "clamp-k must be > 0");
     require(s.temporal.clampRadius >= 1 && s.temporal.clampRadius <= 15,
-            "clamp radius must be in [1, 15]");
-    require(positive(s.history.depthTolerance), "depth tolerance must be > 0");
-    require(positive(s.history.normalTolerance), "normal tolerance must be > 0");
+            "clamp-radius must be in [1, 15]");
+    require(positive(s.history.depthTolerance), "depth-tolerance must be > 0");
+    require(positive(s.history.normalTolerance), "normal-tolerance must be > 0");
     require(std::isfinite(s.motion.scaleX) && std::isfinite(s.motion.scaleY),
-            "motion scale must be finite");
+            "motion-scale must be finite");
     auto unit = [](float v) { return std::isfinite(v) && v >= 0.0f && v <= 1.0f; };
-    require(unit(s.svgf.alpha), "svgf alpha must be in [0, 1]");
-    require(unit(s.svgf.momentsAlpha), "svgf moments alpha must be in [0, 1]");
+    require(unit(s.svgf.alpha), "svgf-alpha must be in [0, 1]");
+    require(unit(s.svgf.momentsAlpha), "svgf-moments-alpha must be in [0, 1]");
     requireSigma(s.svgf.sigmaDepth, "svgf-sigma-depth");
     requireSigma(s.svgf.sigmaNormal, "svgf-sigma-normal");
     requireSigma(s.svgf.sigmaLuminance, "svgf-sigma-luminance");
     require(s.svgf.iterations >= 1 && s.svgf.iterations <= 10,
-            "svgf iterations must be in [1, 10]");
+            "svgf-iterations must be in [1, 10]");
     require(s.svgf.feedbackIteration >= 0 && s.svgf.feedbackIteration < s.svgf.iterations,
-            "svgf feedback iteration must be in [0, iterations - 1]");
+            "svgf-feedback must be in [0, svgf-iterations - 1]");
     require(std::isfinite(s.svgf.historyClampK) && s.svgf.historyClampK >= 0.0f,
-            "svgf history clamp k must be >= 0");
+            "svgf-clamp-k must be >= 0");
     require(s.svgf.maxHistory >= 1 && s.svgf.maxHistory <= 1000,
-            "svgf max history must be in [1, 1000]");
-    require(positive(s.albedo.epsilon), "albedo epsilon must be > 0");
+            "svgf-max-history must be in [1, 1000]");
+    require(positive(s.albedo.epsilon), "albedo-epsilon must be > 0");
 }
 
 const char* toString(Method method) {

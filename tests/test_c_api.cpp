@@ -59,9 +59,9 @@ class CApi : public ::testing::Test {
     void bind(const Frame& f, std::vector<float>& output) {
         const std::size_t w = std::size_t(f.width()), h = std::size_t(f.height());
         output.assign(w * h * 3, 0.0f);
-        ASSERT_EQ(rtdSetImage(denoiser_, "color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3, w, h,
-                              0, 0),
-                  RTD_ERROR_NONE);
+        ASSERT_EQ(
+            rtdSetImage(denoiser_, "color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0),
+            RTD_ERROR_NONE);
         rtdSetImage(denoiser_, "normal", f.normal.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
         rtdSetImage(denoiser_, "position", f.position.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
         rtdSetImage(denoiser_, "depth", f.depth.pixels.data(), RTD_FORMAT_FLOAT, w, h, 0, 0);
@@ -199,10 +199,11 @@ TEST_F(CApi, HalfRgbaWithARowPitchIsRead) {
                                          ((bits >> 13) & 0x3ff));
                 std::memcpy(&rgba[std::size_t(y) * pitch + std::size_t(x) * 8 + std::size_t(c) * 2],
                             &half, 2);
-                std::uint32_t back = half == 0 ? 0
-                                               : ((std::uint32_t(half & 0x8000) << 16) |
-                                                  (((std::uint32_t(half >> 10) & 0x1f) + 112) << 23) |
-                                                  (std::uint32_t(half & 0x3ff) << 13));
+                std::uint32_t back = half == 0
+                                         ? 0
+                                         : ((std::uint32_t(half & 0x8000) << 16) |
+                                            (((std::uint32_t(half >> 10) & 0x1f) + 112) << 23) |
+                                            (std::uint32_t(half & 0x3ff) << 13));
                 std::memcpy(&rounded.beauty.at(x, y, c), &back, 4);
             }
     std::vector<float> out;
@@ -277,13 +278,12 @@ TEST_F(CApi, BadMethodAndSettings) {
     EXPECT_EQ(rtdSetFloat(denoiser_, "alpha", std::nanf("")), RTD_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(takeError(device_).message.find("not finite"), std::string::npos);
     EXPECT_EQ(rtdSetInt(denoiser_, "svgf-iterations", 11), RTD_ERROR_INVALID_ARGUMENT);
-    EXPECT_NE(takeError(device_).message.find("svgf iterations must be in [1, 10]"),
+    EXPECT_NE(takeError(device_).message.find("svgf-iterations must be in [1, 10]"),
               std::string::npos);
     EXPECT_EQ(rtdGetInt(denoiser_, "svgf-iterations"), 5);
     EXPECT_EQ(rtdSetBool(denoiser_, "sigma-color", true), RTD_ERROR_INVALID_ARGUMENT);
     e = takeError(device_);
-    EXPECT_NE(e.message.find("'sigma-color' is a float setting, not a bool one"),
-              std::string::npos)
+    EXPECT_NE(e.message.find("'sigma-color' is a float setting, not a bool one"), std::string::npos)
         << e.message;
     EXPECT_EQ(rtdSetFloat(denoiser_, "radius", 3.5f), RTD_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(rtdSetString(denoiser_, "method", "svgf2"), RTD_ERROR_INVALID_ARGUMENT);
@@ -324,8 +324,7 @@ TEST_F(CApi, BadImages) {
     EXPECT_NE(takeError(device_).message.find("normal: format 9 does not fit"), std::string::npos);
     EXPECT_EQ(rtdSetImage(denoiser_, "color", pixel, RTDFormat(42), 1, 1, 0, 0),
               RTD_ERROR_INVALID_ARGUMENT);
-    EXPECT_NE(takeError(device_).message.find("format 42 is not an RTDFormat"),
-              std::string::npos);
+    EXPECT_NE(takeError(device_).message.find("format 42 is not an RTDFormat"), std::string::npos);
     EXPECT_EQ(rtdSetImage(denoiser_, "color", pixel, RTD_FORMAT_FLOAT3, 0, 1, 0, 0),
               RTD_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(takeError(device_).message.find("size 0x1"), std::string::npos);
@@ -385,6 +384,26 @@ TEST_F(CApi, CallsInTheWrongOrder) {
     rtdReleaseDenoiser(fresh);
 }
 
+// The single-frame methods need no matrices: the object count alone bounds the IDs.
+TEST_F(CApi, AtrousNeedsNoMatrices) {
+    const Frame& f = frames_[0];
+    RTDDenoiser atrous = rtdNewDenoiser(device_, "atrous");
+    const std::size_t w = 64, h = 48;
+    std::vector<float> out(3 * w * h);
+    rtdSetImage(atrous, "color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(atrous, "normal", f.normal.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(atrous, "position", f.position.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(atrous, "depth", f.depth.pixels.data(), RTD_FORMAT_FLOAT, w, h, 0, 0);
+    rtdSetImage(atrous, "ids", f.objectId.data(), RTD_FORMAT_INT, w, h, 0, 0);
+    rtdSetImage(atrous, "output", out.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    ASSERT_EQ(rtdSetObjectCount(atrous, int(f.objectToWorld.size())), RTD_ERROR_NONE);
+    ASSERT_EQ(rtdExecute(atrous), RTD_ERROR_NONE) << takeError(device_).message;
+    Frame withoutAlbedo = f;
+    withoutAlbedo.albedo.reset();
+    EXPECT_EQ(Denoiser(cpuSettings(Method::Atrous)).processFrame(withoutAlbedo).pixels, out);
+    rtdReleaseDenoiser(atrous);
+}
+
 TEST_F(CApi, AnObjectIdOutOfRangeIsInvalidInputAndKeepsTheHistory) {
     const Frame& f = frames_[0];
     std::vector<float> out;
@@ -429,9 +448,10 @@ TEST_F(CApi, ErrorsReachTheCallbackAndTheFirstIsKept) {
 TEST_F(CApi, SettingsHaveTheCommandLinesNames) {
     CliResult help = runCli("denoise --help");
     ASSERT_EQ(help.exitCode, 0) << help.output;
-    const std::set<std::string> notSettings = {
-        "help", "config",   "view-layer", "output", "png",    "compression", "half", "exposure",
-        "video", "fps",     "debug",      "frames", "quiet",  "device",      "motion-scale"};
+    const std::set<std::string> notSettings = {"help",  "config",      "view-layer",  "output",
+                                               "png",   "compression", "half",        "exposure",
+                                               "video", "fps",         "debug",       "frames",
+                                               "quiet", "device",      "motion-scale"};
     std::regex option(R"(--([a-z][a-z0-9-]+))");
     int checked = 0;
     for (std::sregex_iterator it(help.output.begin(), help.output.end(), option), end; it != end;

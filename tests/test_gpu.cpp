@@ -12,6 +12,7 @@
 #endif
 
 #include "input_helpers.h"
+#include "rtdenoise/rtdenoise.h"
 #include "test_support.h"
 #include "tuning.h"
 
@@ -179,6 +180,115 @@ TEST(Gpu, DevicePointersGiveTheHostPathsResult) {
     }
     for (void* p : allocations) cudaFree(p);
 }
+// A CUDA renderer's stream: two denoisers share one device on the caller's stream, their frames
+// in device memory only queued (no host wait), through the C++ and the C API. After the waits,
+// each result is the host path's; a bad object ID is reported at the wait.
+TEST(Gpu, CallersStreamQueuesFramesForSeveralDenoisers) {
+    std::string reason = cudaUnavailableReason();
+    if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects");
+    const int w = frames[0].width(), h = frames[0].height();
+    const std::size_t n = std::size_t(w) * h;
+    cudaStream_t stream = nullptr;
+    ASSERT_EQ(cudaStreamCreate(&stream), cudaSuccess);
+    std::vector<void*> allocations;
+    auto deviceBytes = [&](std::size_t bytes) {
+        void* p = nullptr;
+        EXPECT_EQ(cudaMalloc(&p, bytes), cudaSuccess);
+        allocations.push_back(p);
+        return p;
+    };
+    // The caller's upload, queued on its stream before the denoiser's work.
+    auto upload = [&](const void* host, std::size_t bytes) {
+        void* p = deviceBytes(bytes);
+        EXPECT_EQ(cudaMemcpyAsync(p, host, bytes, cudaMemcpyHostToDevice, stream), cudaSuccess);
+        return p;
+    };
+    auto deviceView = [&](const Frame& f) {
+        FrameView v = viewOf(f);
+        v.space = MemorySpace::Device;
+        v.beauty = static_cast<const float*>(upload(v.beauty.data, 3 * n * 4));
+        v.normal = static_cast<const float*>(upload(v.normal.data, 3 * n * 4));
+        v.position = static_cast<const float*>(upload(v.position.data, 3 * n * 4));
+        v.depth = static_cast<const float*>(upload(v.depth.data, n * 4));
+        v.objectId = static_cast<const std::int32_t*>(upload(v.objectId.data, n * 4));
+        if (v.albedo) v.albedo = static_cast<const float*>(upload(v.albedo.data, 3 * n * 4));
+        return v;
+    };
+    ComputeDevice device = ComputeDevice::fromCudaStream(stream);
+    DenoiserSettings s;
+    s.method = Method::Svgf;
+    Denoiser first(s, device), second(s, device);
+    s.device = DeviceType::Cpu;
+    Denoiser reference(s);
+    for (const Frame& f : frames) {
+        float* out1 = static_cast<float*>(deviceBytes(3 * n * 4));
+        float* out2 = static_cast<float*>(deviceBytes(3 * n * 4));
+        first.processFrame(deviceView(f), out1);
+        second.processFrame(deviceView(f), out2);
+        Image expected = reference.processFrame(f), got1(w, h, 3), got2(w, h, 3);
+        // The caller's download, after the denoisers' work on its stream.
+        ASSERT_EQ(
+            cudaMemcpyAsync(got1.pixels.data(), out1, 3 * n * 4, cudaMemcpyDeviceToHost, stream),
+            cudaSuccess);
+        ASSERT_EQ(
+            cudaMemcpyAsync(got2.pixels.data(), out2, 3 * n * 4, cudaMemcpyDeviceToHost, stream),
+            cudaSuccess);
+        device.synchronize();
+        EXPECT_LE(test::maxRelativeDifference(expected, got1), 1e-3);
+        EXPECT_LE(test::maxRelativeDifference(expected, got2), 1e-3);
+    }
+    first.synchronize();
+    EXPECT_GT(first.lastFrameStats().deviceMilliseconds, 0.0);
+
+    Frame bad = frames.back();
+    bad.objectId[5 * w + 3] = int(bad.objectToWorld.size());
+    first.processFrame(deviceView(bad), static_cast<float*>(deviceBytes(3 * n * 4)));
+    try {
+        first.synchronize();
+        ADD_FAILURE() << "a queued frame's bad object ID was not reported";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("1 pixels of the last 1 queued frames"),
+                  std::string::npos)
+            << e.what();
+    }
+
+    // The C API on the same stream.
+    RTDDevice cDevice = rtdNewCUDADevice(stream);
+    ASSERT_NE(cDevice, nullptr);
+    RTDDenoiser cDenoiser = rtdNewDenoiser(cDevice, "svgf");
+    Denoiser cReference(s);
+    for (const Frame& f : frames) {
+        FrameView v = deviceView(f);
+        float* out = static_cast<float*>(deviceBytes(3 * n * 4));
+        rtdSetImage(cDenoiser, "color", v.beauty.data, RTD_FORMAT_FLOAT3, w, h, 0, 0);
+        rtdSetImage(cDenoiser, "normal", v.normal.data, RTD_FORMAT_FLOAT3, w, h, 0, 0);
+        rtdSetImage(cDenoiser, "position", v.position.data, RTD_FORMAT_FLOAT3, w, h, 0, 0);
+        rtdSetImage(cDenoiser, "depth", v.depth.data, RTD_FORMAT_FLOAT, w, h, 0, 0);
+        rtdSetImage(cDenoiser, "ids", v.objectId.data, RTD_FORMAT_INT, w, h, 0, 0);
+        rtdSetImage(cDenoiser, "albedo", v.albedo.data, RTD_FORMAT_FLOAT3, w, h, 0, 0);
+        rtdSetImage(cDenoiser, "output", out, RTD_FORMAT_FLOAT3, w, h, 0, 0);
+        std::vector<float> m;
+        for (const Matrix4& o : f.objectToWorld)
+            for (const auto& row : o.m) m.insert(m.end(), row.begin(), row.end());
+        for (const Matrix4* o : {&f.worldToCamera, &f.worldToScreen})
+            for (const auto& row : o->m) m.insert(m.end(), row.begin(), row.end());
+        const int k = int(f.objectToWorld.size());
+        rtdSetMatrices(cDenoiser, m.data(), k, m.data() + 16 * k, m.data() + 16 * k + 16);
+        ASSERT_EQ(rtdExecute(cDenoiser), RTD_ERROR_NONE);
+        Image expected = cReference.processFrame(f), got(w, h, 3);
+        ASSERT_EQ(
+            cudaMemcpyAsync(got.pixels.data(), out, 3 * n * 4, cudaMemcpyDeviceToHost, stream),
+            cudaSuccess);
+        ASSERT_EQ(rtdSynchronize(cDevice), RTD_ERROR_NONE);
+        EXPECT_LE(test::maxRelativeDifference(expected, got), 1e-3);
+    }
+    rtdReleaseDenoiser(cDenoiser);
+    rtdReleaseDevice(cDevice);
+    for (void* p : allocations) cudaFree(p);
+    cudaStreamDestroy(stream);
+}
+
 // An engine's buffers: RGBA half colour, normal and position with a row pitch, 2-channel float
 // motion vectors and no matrices, half RGBA out; in device memory and in host memory. Gives the
 // CPU's packed float result on the same (half-rounded) values, to half precision.

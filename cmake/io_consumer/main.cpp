@@ -7,9 +7,9 @@
 #include <rtdenoise/error.h>
 #include <rtdenoise/io.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <cstdint>
 #include <fstream>
 #include <string>
 

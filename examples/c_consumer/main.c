@@ -1,5 +1,4 @@
-/* rtdenoise's C API: DIR/frame_<i>.raw (int32 w, h, K; float RGB colour, normal, position, depth;
- * int32 IDs; K + 2 row-major 4x4 matrices) denoised into DIR/c_result_<i>.raw (float RGB). */
+/* The C API: DIR/frame_<i>.raw (README, "From C") denoised into DIR/c_result_<i>.raw (RGB). */
 #include <rtdenoise/rtdenoise.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,10 +9,11 @@ int main(int argc, char** argv) {
     const char* message = "";
     for (int i = 0; i < atoi(argv[2]); ++i) {
         char path[4096];
-        int size[3] = {0, 0, 0};
+        int size[3] = {0, 0, 0}; /* width, height, K */
         snprintf(path, sizeof path, "%s/frame_%d.raw", argv[1], i);
         FILE* file = fopen(path, "rb");
-        if (!file || fread(size, 4, 3, file) != 3) return fprintf(stderr, "%s: unreadable\n", path), 1;
+        if (!file || fread(size, 4, 3, file) != 3)
+            return fprintf(stderr, "%s: unreadable\n", path), 1;
         size_t w = (size_t)size[0], h = (size_t)size[1], n = w * h, k = (size_t)size[2];
         size_t count = 11 * n + 16 * (k + 2); /* the int32 IDs take a float's 4 bytes */
         float *in = malloc(count * 4), *out = malloc(n * 12), *m = in + 11 * n;

@@ -50,7 +50,8 @@ class ComputeDevice {
     // Throws rtd::Error(DeviceFailure) if `type` is not available (Auto: a GPU, else the CPU).
     explicit ComputeDevice(DeviceType type = DeviceType::Auto);
     // A CUDA device queuing its work on the caller's `stream` (a cudaStream_t; nullptr: the
-    // default stream), after the caller's own work there.
+    // default stream), after the caller's own work there; frames in device memory are then
+    // queued without a host wait.
     static ComputeDevice fromCudaStream(void* stream);
 
     DeviceType type() const;  // Cpu or Cuda
@@ -84,9 +85,10 @@ class Denoiser {
     // are the caller's to get right; IDs are checked in either space (the ingest flags them).
     void processFrame(const FrameView& frame, float* outputRgb);
     // Same, the result in the caller's layout (float or half, 3 or 4 channels, strides).
-    // On a GPU with device-memory buffers (MemorySpace::Device) it only queues the work on the
-    // device's stream: the output is complete, and the frame's statistics and ID check are
-    // known, after synchronize().
+    // On a ComputeDevice::fromCudaStream device with device-memory buffers
+    // (MemorySpace::Device) it only queues the work on the caller's stream: the output is
+    // complete after the caller's stream reaches it, the frame's statistics and ID check are
+    // known after synchronize().
     void processFrame(const FrameView& frame, const OutputView& output);
     // Waits for this denoiser's queued frames; throws rtd::Error(InvalidInput) if one of them
     // held an object ID out of range (read as background: the history is then reset).

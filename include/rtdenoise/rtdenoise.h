@@ -147,9 +147,10 @@ RTD_API RTDError rtdSetMatrices(RTDDenoiser denoiser, const float* objectToWorld
 /* With motion vectors and no matrices: IDs are -1..objectCount-1. */
 RTD_API RTDError rtdSetObjectCount(RTDDenoiser denoiser, int objectCount);
 
-/* Denoises one frame into "output" and keeps it as the next frame's history. On the CPU, or
- * from host memory, it returns with the output written; on a CUDA device with device-memory
- * images it only enqueues (rtdSynchronize waits). A refused frame leaves the history as is. */
+/* Denoises one frame into "output" and keeps it as the next frame's history. It returns with the
+ * output written, except on an rtdNewCUDADevice device with device-memory images: there it only
+ * enqueues on the caller's stream (rtdSynchronize waits, and reports an object ID out of range in
+ * the frames queued, which resets the history). A refused frame leaves the history as is. */
 RTD_API RTDError rtdExecute(RTDDenoiser denoiser);
 /* Forgets the history (a camera cut). */
 RTD_API RTDError rtdReset(RTDDenoiser denoiser);

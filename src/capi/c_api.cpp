@@ -1,7 +1,5 @@
 // The C API (include/rtdenoise/rtdenoise.h) over the C++ Denoiser: handles, settings by name,
 // images by name, and the error boundary (no exception leaves an rtd* function).
-#include "rtdenoise/rtdenoise.h"
-
 #include <fmt/format.h>
 
 #include <atomic>
@@ -17,6 +15,7 @@
 #include <vector>
 
 #include "devices/device.h"
+#include "rtdenoise/rtdenoise.h"
 #include "rtdenoise/rtdenoise.hpp"
 
 using rtd::DenoiserSettings;
@@ -150,8 +149,10 @@ struct SettingEntry {
     void* (*field)(DenoiserSettings&);  // float*, int*, bool*; String entries: the enum
 };
 
-#define RTD_SETTING(NAME, KIND, PATH) \
-    {NAME, ValueKind::KIND, [](DenoiserSettings& s) -> void* { return &s.PATH; }}
+#define RTD_SETTING(NAME, KIND, PATH)                                               \
+    {                                                                               \
+        NAME, ValueKind::KIND, [](DenoiserSettings& s) -> void* { return &s.PATH; } \
+    }
 
 const SettingEntry kSettings[] = {
     RTD_SETTING("method", String, method),
@@ -194,7 +195,8 @@ constexpr std::string_view kDepthKind = "depth-kind";
 
 std::string settingNames() {
     std::string names;
-    for (const SettingEntry& e : kSettings) names += std::string(names.empty() ? "" : ", ") + e.name;
+    for (const SettingEntry& e : kSettings)
+        names += std::string(names.empty() ? "" : ", ") + e.name;
     return names + ", " + std::string(kDepthKind);
 }
 
@@ -208,9 +210,8 @@ const SettingEntry& findSetting(const char* name) {
 
 void requireKind(const SettingEntry& e, ValueKind given) {
     if (e.kind != given)
-        fail(RTD_ERROR_INVALID_ARGUMENT,
-             fmt::format("'{}' is a {} setting, not a {} one", e.name, kindName(e.kind),
-                         kindName(given)));
+        fail(RTD_ERROR_INVALID_ARGUMENT, fmt::format("'{}' is a {} setting, not a {} one", e.name,
+                                                     kindName(e.kind), kindName(given)));
 }
 
 template <class Enum>
@@ -220,14 +221,14 @@ Enum enumNamed(const char* setting, const char* value, std::initializer_list<Enu
         if (value && std::strcmp(rtd::toString(v), value) == 0) return v;
         allowed += std::string(allowed.empty() ? "" : ", ") + rtd::toString(v);
     }
-    fail(RTD_ERROR_INVALID_ARGUMENT, fmt::format("{}: '{}' is not one of {}", setting,
-                                                 value ? value : "NULL", allowed));
+    fail(RTD_ERROR_INVALID_ARGUMENT,
+         fmt::format("{}: '{}' is not one of {}", setting, value ? value : "NULL", allowed));
 }
 
 rtd::Method methodNamed(const char* name) {
-    return enumNamed("method", name,
-                     {rtd::Method::Jbf, rtd::Method::Atrous, rtd::Method::Temporal,
-                      rtd::Method::Svgf});
+    return enumNamed(
+        "method", name,
+        {rtd::Method::Jbf, rtd::Method::Atrous, rtd::Method::Temporal, rtd::Method::Svgf});
 }
 
 // ---- images by name ----
@@ -252,9 +253,9 @@ int channelsOf(RTDFormat f) {
     return 0;
 }
 rtd::DataType typeOf(RTDFormat f) {
-    return f == RTD_FORMAT_INT                                       ? rtd::DataType::Int32
+    return f == RTD_FORMAT_INT                               ? rtd::DataType::Int32
            : (f >= RTD_FORMAT_HALF && f <= RTD_FORMAT_HALF4) ? rtd::DataType::Float16
-                                                                     : rtd::DataType::Float32;
+                                                             : rtd::DataType::Float32;
 }
 std::size_t valueBytes(RTDFormat f) {
     return typeOf(f) == rtd::DataType::Float16 ? 2 : 4;
@@ -282,9 +283,8 @@ void checkFormat(ImageSlot slot, RTDFormat format) {
     const bool intOk = slot == kIds;
     if (channels < lowest || channels > highest || (format == RTD_FORMAT_INT && !intOk) ||
         (slot == kIds && typeOf(format) == rtd::DataType::Float16))
-        fail(RTD_ERROR_INVALID_ARGUMENT,
-             fmt::format("{}: format {} does not fit, expected {}", kImageNames[slot],
-                         int(format), expected));
+        fail(RTD_ERROR_INVALID_ARGUMENT, fmt::format("{}: format {} does not fit, expected {}",
+                                                     kImageNames[slot], int(format), expected));
 }
 
 }  // namespace rtd::capi
@@ -388,6 +388,9 @@ void execute(RTDDenoiser d) {
     view.albedo = viewOf(d->images[kAlbedo]);
     view.motion = viewOf(d->images[kMotion]);
     view.objectCount = d->objectCount;
+    // The single-frame methods never reproject: without matrices, identities stand for them.
+    if (!d->hasMatrices && !motion)
+        d->objectToWorld.assign(std::size_t(d->objectCount), rtd::Matrix4::identity());
     view.objectToWorld = d->objectToWorld.empty() ? nullptr : d->objectToWorld.data();
     if (!motion && d->hasMatrices) view.objectCount = int(d->objectToWorld.size());
     view.worldToCamera = d->worldToCamera;
@@ -476,7 +479,8 @@ RTDError rtdGetDeviceError(RTDDevice device, const char** outMessage) {
 
 void rtdSetDeviceErrorFunction(RTDDevice device, RTDErrorFunction function, void* userPtr) {
     if (!device) {
-        report(nullptr, RTD_ERROR_INVALID_ARGUMENT, "rtdSetDeviceErrorFunction: the device is NULL");
+        report(nullptr, RTD_ERROR_INVALID_ARGUMENT,
+               "rtdSetDeviceErrorFunction: the device is NULL");
         return;
     }
     std::lock_guard<std::mutex> lock(device->mutex);
@@ -667,8 +671,9 @@ const char* rtdGetString(RTDDenoiser d, const char* name) {
         }
         const SettingEntry& e = findSetting(name);
         requireKind(e, ValueKind::String);
-        value = std::strcmp(e.name, "method") == 0 ? rtd::toString(d->settings.method)
-                                                   : rtd::toString(d->settings.temporal.spatialFilter);
+        value = std::strcmp(e.name, "method") == 0
+                    ? rtd::toString(d->settings.method)
+                    : rtd::toString(d->settings.temporal.spatialFilter);
     });
     return value;
 }
@@ -695,8 +700,7 @@ RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat
                  fmt::format("{}: size {}x{} is empty or too large", name, width, height));
         const std::size_t pixelBytes = std::size_t(channelsOf(format)) * valueBytes(format);
         const std::size_t pixel = pixelStride ? pixelStride : pixelBytes;
-        if (pixel < pixelBytes ||
-            (rowStride != 0 && rowStride < (width - 1) * pixel + pixelBytes))
+        if (pixel < pixelBytes || (rowStride != 0 && rowStride < (width - 1) * pixel + pixelBytes))
             fail(RTD_ERROR_INVALID_ARGUMENT,
                  fmt::format("{}: strides of {} bytes per pixel and {} per row are too small for "
                              "{} bytes per pixel in rows of {} pixels",

@@ -24,8 +24,8 @@ class Device {
   public:
     virtual ~Device() = default;
     virtual std::string name() const = 0;
-    // True if work is queued and runs after the calls return (a GPU), false if each call
-    // returns with its work done (the CPU).
+    // True if a frame of device buffers may be left queued when processFrame returns (a GPU on
+    // the caller's stream), false if each call returns with its work done.
     virtual bool queuesWork() const { return false; }
     // True if kernels can read and write host memory directly (no staging copies needed).
     virtual bool sharesHostMemory() const = 0;

@@ -12,8 +12,8 @@ static int failed(RTDDevice device, char* message, int messageSize) {
     return code == RTD_ERROR_NONE ? RTD_ERROR_UNKNOWN : (int)code;
 }
 
-int denoiseInC(const char* method, const CFrame* frames, int count, float** outputs,
-               char* message, int messageSize) {
+int denoiseInC(const char* method, const CFrame* frames, int count, float** outputs, char* message,
+               int messageSize) {
     RTDDevice device = rtdNewDevice(RTD_DEVICE_CPU);
     if (!device) return failed(NULL, message, messageSize);
     RTDDenoiser denoiser = rtdNewDenoiser(device, method);

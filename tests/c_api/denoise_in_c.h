@@ -21,8 +21,8 @@ typedef struct {
 /* Denoises `count` frames in order with `method` on the CPU, frame i's result into outputs[i]
  * (width * height * 3 floats). Returns 0, or the first RTDError with its message in `message`
  * (at most `messageSize` bytes). */
-int denoiseInC(const char* method, const CFrame* frames, int count, float** outputs,
-               char* message, int messageSize);
+int denoiseInC(const char* method, const CFrame* frames, int count, float** outputs, char* message,
+               int messageSize);
 
 /* Whether this file was compiled as C (not C++): __cplusplus undefined there. */
 int compiledAsC(void);

@@ -176,6 +176,7 @@ class CudaContext final : public DeviceContext {
         check(cudaGetDeviceProperties(&properties, device), "cudaGetDeviceProperties");
         name = std::string("cuda (") + properties.name + ")";
         ownsStream_ = !callerStream;
+        queues = callerStream;
         if (callerStream)
             this->stream = stream;
         else
@@ -208,6 +209,7 @@ class CudaContext final : public DeviceContext {
     void* stage[kStageSlots] = {};
     cudaEvent_t stageFree[kStageSlots] = {};
     int nextStage = 0;
+    bool queues = false;  // device-memory frames are queued without a wait (the caller's stream)
 
   private:
     bool ownsStream_ = true;
@@ -236,7 +238,9 @@ class CudaDevice final : public Device {
     }
 
     std::string name() const override { return context_->name; }
-    bool queuesWork() const override { return true; }
+    // On the caller's stream the caller orders its work after ours: a frame need not be waited
+    // for. On a stream of our own the caller could not, so each frame is.
+    bool queuesWork() const override { return context_->queues; }
     bool sharesHostMemory() const override { return false; }
 
     // SVGF's guide interleaved (one 16-byte load per tap): its steps have that form here. The
