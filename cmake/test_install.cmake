@@ -70,10 +70,15 @@ execute_process(COMMAND "${WORK_DIR}/io_consumer/io_consumer" --pack "${scene}" 
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "packing the scene's frames as raw buffers failed (${rc})")
 endif()
+# A sanitizer build's librtdenoise_c needs the sanitizers' C++ runtime, which a C link omits.
+set(c_link_flags "")
+if(C_FLAGS MATCHES "-fsanitize")
+  set(c_link_flags "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize-link-c++-runtime -lstdc++")
+endif()
 execute_process(COMMAND ${CMAKE_COMMAND} -S "${SOURCE_DIR}/examples/c_consumer"
                         -B "${WORK_DIR}/c_consumer" -G Ninja
                         -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_C_COMPILER=${C_COMPILER}
-                        "-DCMAKE_C_FLAGS=${C_FLAGS}"
+                        "-DCMAKE_C_FLAGS=${C_FLAGS}" ${c_link_flags}
                 RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "configuring the C consumer with find_package(rtdenoise) failed")

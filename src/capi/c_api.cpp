@@ -412,8 +412,11 @@ int rtdGetVersion(void) {
 // ---- devices ----
 
 namespace {
-RTDDevice newDevice(const char* call, bool callerStream, RTDDeviceType type, void* stream) {
+RTDDevice newDevice(const char* call, bool callerStream, const RTDDeviceType& given, void* stream) {
     RTDDevice made = nullptr;
+    // The caller's value may be outside the enum's (a C caller's int): read as one, not the enum.
+    int type = 0;
+    std::memcpy(&type, &given, sizeof type);
     guarded(nullptr, call, [&] {
         if (!callerStream && type != RTD_DEVICE_DEFAULT && type != RTD_DEVICE_CPU &&
             type != RTD_DEVICE_CUDA)
@@ -678,9 +681,15 @@ const char* rtdGetString(RTDDenoiser d, const char* name) {
     return value;
 }
 
-RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat format,
+RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat givenFormat,
                      size_t width, size_t height, size_t pixelStride, size_t rowStride) {
     return guarded(deviceOf(d), "rtdSetImage", [&] {
+        int formatValue = 0;  // a C caller's int may be outside the enum (see newDevice)
+        std::memcpy(&formatValue, &givenFormat, sizeof formatValue);
+        if (ptr && (formatValue <= RTD_FORMAT_UNDEFINED || formatValue > RTD_FORMAT_INT))
+            fail(RTD_ERROR_INVALID_ARGUMENT, fmt::format("{}: format {} is not an RTDFormat",
+                                                         name ? name : "NULL", formatValue));
+        const RTDFormat format = ptr ? RTDFormat(formatValue) : RTD_FORMAT_UNDEFINED;
         requireDenoiser(d);
         if (!name) fail(RTD_ERROR_INVALID_ARGUMENT, "the image name is NULL");
         int slot = 0;
