@@ -558,11 +558,7 @@ void rtdReleaseDenoiser(RTDDenoiser denoiser) {
                 break;
             }
     }
-    try {
-        delete denoiser;  // waits for its queued work
-    } catch (...) {
-        report(device, RTD_ERROR_DEVICE_FAILURE, "rtdReleaseDenoiser: freeing it failed");
-    }
+    delete denoiser;  // waits for its queued work (destructors do not throw)
     rtdReleaseDevice(device);
 }
 
