@@ -163,8 +163,7 @@ std::string ComputeDevice::name() const {
     return impl_->name;
 }
 void ComputeDevice::synchronize() {
-    // Any of the context's devices waits on the shared stream; a CPU device has nothing queued.
-    if (impl_->context->type == DeviceType::Cuda) createDevice(impl_->context)->synchronize();
+    impl_->context->synchronize();
 }
 
 struct Denoiser::Impl {

@@ -17,6 +17,8 @@ namespace rtd {
 // CPU's holds nothing: each denoiser's Device has its own working memory.
 struct DeviceContext {
     virtual ~DeviceContext() = default;
+    // Waits for the work queued on the shared stream (none on the CPU).
+    virtual void synchronize() {}
     DeviceType type = DeviceType::Cpu;  // Cpu or Cuda
 };
 

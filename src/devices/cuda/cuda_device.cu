@@ -193,6 +193,7 @@ class CudaContext final : public DeviceContext {
         }
         if (ownsStream_) cudaStreamDestroy(stream);
     }
+    void synchronize() override { check(cudaStreamSynchronize(stream), "synchronize"); }
     // Once, at the first large copy (24 MiB of pinned host memory).
     void allocateStaging() {
         if (stage[0]) return;
