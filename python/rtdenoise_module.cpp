@@ -266,6 +266,8 @@ py::dict frameDict(rtd::Frame&& frame) {
     result["ids"] = arrayOwning(std::move(frame.objectId), {height, width});
     result["albedo"] = frame.albedo ? py::object(arrayOf(std::move(*frame.albedo))) : py::none();
     result["motion"] = frame.motion ? py::object(arrayOf(std::move(*frame.motion))) : py::none();
+    result["confidence"] =
+        frame.confidence ? py::object(arrayOf(std::move(*frame.confidence), true)) : py::none();
     const auto objects = static_cast<py::ssize_t>(frame.objectToWorld.size());
     result["object_count"] = frame.objectCount > 0 ? frame.objectCount : int(objects);
     if (objects > 0) {

@@ -3,8 +3,11 @@
 # denoises it with every method (defaults), and prints scene x method: relMSE, PSNR, SSIM and
 # temporal error (means over the frames) as a Markdown table.
 #   scripts/quality_table.sh [WIDTH HEIGHT FRAMES REF_SPP]   (default 128 128 8 256)
-# Environment: METHODS (default "input jbf atrous temporal svgf") and EXTRA (options added to
-# every denoise, e.g. EXTRA="--svgf-clamp-k 0" METHODS=svgf for the paper's SVGF).
+# Environment: SCENES (default the four below), METHODS (default "input jbf atrous temporal
+# svgf") and EXTRA (options added to
+# every denoise, e.g. EXTRA="--svgf-clamp-k 0" METHODS=svgf for the paper's SVGF), RENDER_EXTRA
+# (options added to every render, e.g. "--confidence": the renderer's A-SVGF confidence, which
+# the detail method then reads).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 width="${1:-128}" height="${2:-128}" frames="${3:-8}" refspp="${4:-256}"
@@ -13,9 +16,9 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 echo "| scene | method | relMSE | PSNR (dB) | SSIM | temporal error |"
 echo "|---|---|---|---|---|---|"
-for scene in moving-objects camera-pan thin-geometry switching-light; do
+for scene in ${SCENES:-moving-objects camera-pan thin-geometry switching-light}; do
   "$bin" render "$scene" -o "$work/$scene" --width "$width" --height "$height" \
-      --frames "$frames" --ref-spp "$refspp" -q
+      --frames "$frames" --ref-spp "$refspp" ${RENDER_EXTRA:-} -q
   # "input": the noisy frames themselves (a 0-radius JBF without firefly removal is the identity)
   for method in ${METHODS:-input jbf atrous temporal svgf}; do
     args=(--method "$method" ${EXTRA:-})

@@ -70,6 +70,7 @@ void checkFrame(const Frame& f) {
             ErrorCode::InvalidInput,
             fmt::format("frame: motion has {} channels, expected 2 to 4", f.motion->channels));
     if (f.motion) checkImage(*f.motion, w, h, f.motion->channels, "motion");
+    if (f.confidence) checkImage(*f.confidence, w, h, 1, "confidence");
     if (f.objectId.size() != std::size_t(w) * h)
         throw Error(
             ErrorCode::InvalidInput,
@@ -184,7 +185,7 @@ struct Denoiser::Impl {
     std::vector<Matrix4> previousObjectToWorld;
     Matrix4 previousWorldToScreen;
     // Per frame: the caller's buffers as the device sees them.
-    InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo, inMotion;
+    InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo, inMotion, inConfidence;
 
     Impl(const DenoiserSettings& s, const DeviceTuning& tuning,
          std::shared_ptr<DeviceContext> sharedContext)
@@ -201,7 +202,8 @@ struct Denoiser::Impl {
 
     void allocate(int w, int h) {
         pipeline.allocate(*device, w, h);
-        for (auto* in : {&inBeauty, &inNormal, &inPosition, &inDepth, &inId, &inAlbedo, &inMotion})
+        for (auto* in : {&inBeauty, &inNormal, &inPosition, &inDepth, &inId, &inAlbedo, &inMotion,
+                         &inConfidence})
             *in = InputBuffer{};
         stageOutput = DeviceBuffer<float>();  // made at the first frame that needs it
         hasHistory = false;
@@ -244,9 +246,12 @@ struct Denoiser::Impl {
         InputLayout depth = inputLayout("depth", f.depth, w, h, 1, 4, false);
         InputLayout ids = inputLayout("objectId", f.objectId, w, h, 1, 4, true);
         // All checked before any is bound.
-        std::optional<InputLayout> albedo, motion;
+        std::optional<InputLayout> albedo, motion, confidence;
         if (useAlbedo) albedo = inputLayout("albedo", f.albedo, w, h, 3, 4, false);
         if (useMotion) motion = inputLayout("motion", f.motion, w, h, 2, 4, false);
+        // History confidence weighs the history, so only methods with history read it.
+        if (f.confidence && reprojects)
+            confidence = inputLayout("confidence", f.confidence, w, h, 1, 4, false);
         // With matrices, back-projection compares view depths: a ray distance is replaced.
         const bool viewDepth = f.depthKind == DepthKind::RayDistance && !useMotion && reprojects;
         bindInput(inBeauty, beauty, f.space, 3, false);
@@ -258,6 +263,8 @@ struct Denoiser::Impl {
         if (albedo) bindInput(inAlbedo, *albedo, f.space, 3, false);
         inMotion.span = {};
         if (motion) bindInput(inMotion, *motion, f.space, 2, false, true);
+        inConfidence.span = {};
+        if (confidence) bindInput(inConfidence, *confidence, f.space, 1, false, true);
         if (viewDepth) {
             ConvertStep convert;
             convert.kind = ConvertStep::Kind::ViewDepth;
@@ -341,6 +348,7 @@ struct Denoiser::Impl {
                            static_cast<const std::int32_t*>(inId.device),
                            floats(inAlbedo),
                            inMotion.span,
+                           inConfidence.span,
                            f.objectCount,
                            objects.data(),
                            hasHistory ? 1 : 0,

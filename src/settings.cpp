@@ -56,6 +56,18 @@ void validate(const DenoiserSettings& s) {
             "svgf-clamp-k must be >= 0");
     require(s.svgf.maxHistory >= 1 && s.svgf.maxHistory <= 1000,
             "svgf-max-history must be in [1, 1000]");
+    requireSigma(s.detail.sigmaDepth, "detail-sigma-depth");
+    requireSigma(s.detail.sigmaNormal, "detail-sigma-normal");
+    requireSigma(s.detail.sigmaLuminance, "detail-sigma-luminance");
+    require(s.detail.iterations >= 1 && s.detail.iterations <= 10,
+            "detail-iterations must be in [1, 10]");
+    require(s.detail.maxHistory >= 1 && s.detail.maxHistory <= 1000,
+            "detail-max-history must be in [1, 1000]");
+    require(s.detail.fastHistory >= 1 && s.detail.fastHistory <= s.detail.maxHistory,
+            "detail-fast-history must be in [1, detail-max-history]");
+    require(std::isfinite(s.detail.clampSigma) && s.detail.clampSigma >= 0.0f,
+            "detail-clamp-sigma must be >= 0");
+    require(unit(s.detail.momentsAlpha), "detail-moments-alpha must be in [0, 1]");
     require(positive(s.albedo.epsilon), "albedo-epsilon must be > 0");
 }
 
@@ -69,6 +81,8 @@ const char* toString(Method method) {
             return "temporal";
         case Method::Svgf:
             return "svgf";
+        case Method::Detail:
+            return "detail";
     }
     return "?";
 }

@@ -3,6 +3,7 @@
 // message without crashing; settings have the command line's names.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <regex>
 #include <set>
@@ -416,6 +417,38 @@ TEST_F(CApi, AnObjectIdOutOfRangeIsInvalidInputAndKeepsTheHistory) {
     EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_INVALID_INPUT);
     LastError e = takeError(device_);
     EXPECT_NE(e.message.find("object ID 1000 at pixel (5, 0)"), std::string::npos) << e.message;
+}
+
+// The optional history confidence: 1 float or half value a pixel, the frame's size.
+TEST_F(CApi, ConfidenceIsAnOptionalOneChannelImage) {
+    const Frame& f = frames_[0];
+    const std::size_t w = 64, h = 48;
+    std::vector<float> out;
+    bind(f, out);
+    std::vector<float> confidence(w * h, 0.25f);
+    std::vector<std::uint16_t> halfConfidence(w * h, 0x3400);  // 0.25
+    EXPECT_EQ(
+        rtdSetImage(denoiser_, "confidence", confidence.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0),
+        RTD_ERROR_INVALID_ARGUMENT);
+    LastError e = takeError(device_);
+    EXPECT_NE(e.message.find("confidence: format 3 does not fit, expected 1 float or half"),
+              std::string::npos)
+        << e.message;
+    ASSERT_EQ(
+        rtdSetImage(denoiser_, "confidence", halfConfidence.data(), RTD_FORMAT_HALF, w, h, 0, 0),
+        RTD_ERROR_NONE);
+    ASSERT_EQ(
+        rtdSetImage(denoiser_, "confidence", confidence.data(), RTD_FORMAT_FLOAT, w / 2, h, 0, 0),
+        RTD_ERROR_NONE);
+    EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_INVALID_ARGUMENT);
+    e = takeError(device_);
+    EXPECT_NE(e.message.find("the image 'confidence' is 32x48, but 'color' is 64x48"),
+              std::string::npos)
+        << e.message;
+    ASSERT_EQ(rtdSetImage(denoiser_, "confidence", confidence.data(), RTD_FORMAT_FLOAT, w, h, 0, 0),
+              RTD_ERROR_NONE);
+    ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE) << takeError(device_).message;
+    for (float v : out) ASSERT_TRUE(std::isfinite(v));
 }
 
 TEST_F(CApi, ErrorsReachTheCallbackAndTheFirstIsKept) {

@@ -282,5 +282,118 @@ TEST(MotionVectors, NonFiniteMotionGivesAFiniteResult) {
     }
 }
 
+// The optional history confidence: the wrong size, channel count or type is refused naming it.
+TEST(Confidence, AWrongSizeOrLayoutIsRefusedNamingIt) {
+    const Frame& good = cameraPanFrames()[0];
+    const int w = good.width(), h = good.height();
+    for (Method method : {Method::Atrous, Method::Svgf}) {
+        Denoiser d(test::cpuSettings(method));
+        Frame f = good;
+        f.confidence = Image(w - 1, h, 1, 1.0f);
+        try {
+            d.processFrame(f);
+            ADD_FAILURE() << "accepted a confidence of the wrong size";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+            EXPECT_NE(std::string(e.what()).find(
+                          fmt::format("confidence is {}x{}x1 ({} values), expected {}x{}x1", w - 1,
+                                      h, (w - 1) * h, w, h)),
+                      std::string::npos)
+                << e.what();
+        }
+        f.confidence = Image(w, h, 3, 1.0f);
+        EXPECT_THROW(d.processFrame(f), Error);
+    }
+    Denoiser d(test::cpuSettings(Method::Svgf));
+    std::vector<float> out(3 * good.beauty.pixelCount());
+    std::vector<std::int32_t> ids(good.beauty.pixelCount(), 0);
+    FrameView v = viewOf(good);
+    v.confidence = ImageView(ids.data(), DataType::Int32, 1);
+    try {
+        d.processFrame(v, out.data());
+        ADD_FAILURE() << "accepted int32 confidence";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("confidence: int32 values are for object IDs only"),
+                  std::string::npos)
+            << e.what();
+    }
+    // Still usable; a confidence of the right size is taken by every method.
+    Frame f = good;
+    f.confidence = Image(w, h, 1, 0.5f);
+    EXPECT_NO_THROW(d.processFrame(f));
+    EXPECT_NO_THROW(Denoiser(test::cpuSettings(Method::Jbf)).processFrame(f));
+}
+
+// What the kernels read of it: clamped to [0, 1], NaN as 1 (as none), 1 where none is given.
+TEST(Confidence, KernelsReadItClampedWithNaNAsOne) {
+    const float values[] = {0.3f, -0.5f, 1.5f, NAN, -INFINITY, INFINITY, 0.0f, 1.0f};
+    const float expected[] = {0.3f, 0.0f, 1.0f, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f};
+    InputSpan span{reinterpret_cast<const unsigned char*>(values), kSpanFloat32, 1, 4, 32};
+    for (int x = 0; x < 8; ++x) EXPECT_EQ(loadConfidence(span, x, 0), expected[x]) << x;
+    std::uint16_t halves[2] = {floatToHalf(0.25f), floatToHalf(2.0f)};
+    InputSpan halfSpan{reinterpret_cast<const unsigned char*>(halves), kSpanFloat16, 1, 2, 4};
+    EXPECT_EQ(loadConfidence(halfSpan, 0, 0), 0.25f);
+    EXPECT_EQ(loadConfidence(halfSpan, 1, 0), 1.0f);
+    EXPECT_EQ(loadConfidence(InputSpan{}, 3, 7), 1.0f);
+}
+
+// A folder with confidence_<i>.exr: read with its frame (1 channel; an RGB file's R), and a file
+// of another size is refused naming it, by checkFrames before any pixel and by readFrame.
+TEST(Confidence, SequenceFoldersReadConfidenceFiles) {
+    test::TempFolder dir("confidence-sequence");
+    render::RenderSettings r;
+    r.width = 30;
+    r.height = 21;
+    r.frames = 2;
+    r.gbufferOnly = true;
+    r.confidence = true;
+    render::renderSequence("switching-light", r, dir.path());
+    ASSERT_TRUE(std::filesystem::exists(dir.path() / "confidence_1.exr"));
+    Sequence sequence(dir.path());
+    Frame first = sequence.readFrame(0);
+    ASSERT_TRUE(first.confidence.has_value());
+    EXPECT_EQ(first.confidence->width, 30);
+    EXPECT_EQ(first.confidence->height, 21);
+    EXPECT_EQ(first.confidence->channels, 1);
+    for (float v : first.confidence->pixels) EXPECT_EQ(v, 1.0f);  // frame 0: no history to doubt
+    // An RGB file: its R channel.
+    Image rgb(30, 21, 3, 0.0f);
+    for (std::size_t p = 0; p < rgb.pixelCount(); ++p) {
+        rgb.pixels[3 * p] = float(p % 7) / 7.0f;
+        rgb.pixels[3 * p + 1] = 1.0f;
+    }
+    writeExr(dir.path() / "confidence_1.exr", rgb);
+    Frame second = sequence.readFrame(1);
+    ASSERT_TRUE(second.confidence.has_value());
+    ASSERT_EQ(second.confidence->channels, 1);
+    for (std::size_t p = 0; p < rgb.pixelCount(); ++p)
+        ASSERT_EQ(second.confidence->pixels[p], rgb.pixels[3 * p]);
+    // A denoiser takes the frames as read.
+    Denoiser d(test::cpuSettings(Method::Svgf));
+    EXPECT_NO_THROW(d.processFrame(first));
+    EXPECT_NO_THROW(d.processFrame(second));
+    // Another size.
+    writeExr(dir.path() / "confidence_1.exr", Image(29, 21, 1, 1.0f));
+    const std::string name = (dir.path() / "confidence_1.exr").string();
+    for (int pass = 0; pass < 2; ++pass) {
+        try {
+            if (pass == 0)
+                sequence.checkFrames(2);
+            else
+                sequence.readFrame(1);
+            ADD_FAILURE() << "accepted a 29x21 confidence";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+            EXPECT_NE(std::string(e.what()).find(name + ": 29x21, but "), std::string::npos)
+                << e.what();
+        }
+    }
+    // Without --confidence a new render leaves none of the old files to be read as its own.
+    r.confidence = false;
+    render::renderSequence("switching-light", r, dir.path());
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / "confidence_0.exr"));
+    EXPECT_FALSE(Sequence(dir.path()).readFrame(0).confidence.has_value());
+}
+
 }  // namespace
 }  // namespace rtd

@@ -1,14 +1,17 @@
 // The test-scene renderer against known answers: the white furnace and area lights with analytic
 // irradiance, the reference against independent 1-spp frames, G-buffers against the matrices,
 // back-projection of moving objects, determinism, the written folder and the command line.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 
+#include "render/confidence.h"
 #include "render/path_tracer.h"
 #include "render/render_sequence.h"
 #include "render/scenes.h"
@@ -517,6 +520,92 @@ TEST(Render, WrittenFolderIsASequenceWithReferenceAndSceneJson) {
 }
 
 // ---- the command ----
+
+// The confidence images of frames 0..frames-1 of `scene` rendered with --confidence.
+std::vector<Image> renderConfidence(const std::string& scene, int size, int frames) {
+    test::TempFolder dir("confidence-" + scene);
+    RenderSettings r;
+    r.width = r.height = size;
+    r.frames = frames;
+    r.gbufferOnly = true;
+    r.confidence = true;
+    renderSequence(scene, r, dir.path());
+    std::vector<Image> out;
+    for (int i = 0; i < frames; ++i)
+        out.push_back(readExr(dir.path() / fmt::format("confidence_{}.exr", i), {{"Y"}}));
+    return out;
+}
+
+double mean(const Image& image) {
+    double sum = 0.0;
+    for (float v : image.pixels) sum += v;
+    return sum / double(image.pixels.size());
+}
+
+// switching-light's ceiling light goes off at frame 6: the history of what it lit is stale
+// there, and only there. "What it lit": pixels that keep under 25% of their light (frames 5 and 6
+// at 16 spp, 3x3 box); elsewhere the orbiting light, which moves a little each frame, dominates.
+TEST(Confidence, DropsOnTheFrameTheLightSwitchesAndStaysNearOneElsewhere) {
+    constexpr int kSize = 48;
+    const std::vector<Image> confidence = renderConfidence("switching-light", kSize, 8);
+    TraceSettings t;
+    t.width = t.height = kSize;
+    t.samplesPerPixel = 16;
+    const Image on = renderRadiance(buildScene("switching-light", 5), t);
+    const Image off = renderRadiance(buildScene("switching-light", 6), t);
+    auto boxLuminance = [&](const Image& image, int x, int y) {
+        double sum = 0.0;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int sx = std::clamp(x + dx, 0, kSize - 1),
+                          sy = std::clamp(y + dy, 0, kSize - 1);
+                sum += luminance({image.at(sx, sy, 0), image.at(sx, sy, 1), image.at(sx, sy, 2)});
+            }
+        return sum;
+    };
+    for (float v : confidence[0].pixels) ASSERT_EQ(v, 1.0f);  // frame 0: no history
+    for (int i = 1; i < 8; ++i) {
+        for (float v : confidence[i].pixels) ASSERT_TRUE(v >= 0.0f && v <= 1.0f);
+        double litSum = 0.0;
+        int lit = 0;
+        for (int y = 0; y < kSize; ++y)
+            for (int x = 0; x < kSize; ++x)
+                if (boxLuminance(off, x, y) < 0.25 * boxLuminance(on, x, y)) {
+                    litSum += confidence[i].at(x, y);
+                    ++lit;
+                }
+        ASSERT_GT(lit, kSize * kSize / 4);  // the ceiling light lights most of the room
+        const double litMean = litSum / lit;
+        if (i == 6) {
+            // gain 1: confidence is about the share of the light kept, under 25% here.
+            EXPECT_LT(litMean, 0.3) << "frame " << i;
+        } else if (i == 7) {
+            // Lit by the orbiting light alone, the room's lighting changes by a fifth a frame.
+            EXPECT_GT(mean(confidence[i]), 0.65) << "frame " << i;
+        } else {
+            EXPECT_GT(litMean, 0.85) << "frame " << i;
+            EXPECT_GT(mean(confidence[i]), 0.85) << "frame " << i;
+        }
+    }
+}
+
+// Nothing changes: last frame's sample re-shaded is the same path (the same random numbers),
+// so noise cannot lower the confidence; the furnace through renderSequence, and a still frame of
+// switching-light through historyConfidence.
+TEST(Confidence, IsOneWhereNothingChanges) {
+    for (const Image& image : renderConfidence("furnace", 48, 3))
+        for (float v : image.pixels) ASSERT_EQ(v, 1.0f);
+    const Scene still = buildScene("switching-light", 2);
+    TraceSettings t;
+    t.width = 48;
+    t.height = 40;
+    t.frameIndex = 3;
+    const Frame gbuffer = renderGBuffer(still, t.width, t.height);
+    const Image c = historyConfidence(still, still, gbuffer, t);
+    ASSERT_EQ(c.width, 48);
+    ASSERT_EQ(c.height, 40);
+    EXPECT_EQ(mean(c), 1.0);
+}
 
 using test::CliResult;
 using test::runCli;

@@ -86,7 +86,8 @@ std::pair<int, int> parseSize(const std::string& text) {
 const std::map<std::string, Method> kBenchMethods{{"jbf", Method::Jbf},
                                                   {"atrous", Method::Atrous},
                                                   {"temporal", Method::Temporal},
-                                                  {"svgf", Method::Svgf}};
+                                                  {"svgf", Method::Svgf},
+                                                  {"detail", Method::Detail}};
 struct BenchDevice {
     DeviceType type;
     CpuIsa isa;
@@ -243,7 +244,7 @@ Command addBenchCommand(CLI::App& app) {
     CLI::App* c = app.add_subcommand(
         "bench", "Median and min ms per frame and per pass of each method, device and size");
     c->add_option("--method", o->methods, "Methods to time")
-        ->check(CLI::IsMember({"jbf", "atrous", "temporal", "svgf"}))
+        ->check(CLI::IsMember({"jbf", "atrous", "temporal", "svgf", "detail"}))
         ->capture_default_str();
     c->add_option("--device", o->devices,
                   "Devices to time; cpu-scalar|sse2|avx2|avx512: the CPU kernels built for one "

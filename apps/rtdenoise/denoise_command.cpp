@@ -44,7 +44,8 @@ struct DenoiseOptions {
 const std::map<std::string, Method> kMethods{{"jbf", Method::Jbf},
                                              {"atrous", Method::Atrous},
                                              {"temporal", Method::Temporal},
-                                             {"svgf", Method::Svgf}};
+                                             {"svgf", Method::Svgf},
+                                             {"detail", Method::Detail}};
 const std::map<std::string, SpatialFilter> kFilters{{"jbf", SpatialFilter::Jbf},
                                                     {"atrous", SpatialFilter::Atrous}};
 const std::map<std::string, DeviceType> kDevices{
@@ -124,8 +125,8 @@ void checkVideoPath(const DenoiseOptions& options) {
 // a shorter or different run leaves nothing of an earlier one for `compare` to score with it.
 void removeEarlierOutputs(const DenoiseOptions& options, const DenoiserSettings& settings,
                           int frames) {
-    const bool history = settings.method == Method::Temporal || settings.method == Method::Svgf;
-    const bool svgfViews = settings.method == Method::Svgf;
+    const bool history = usesHistory(settings.method);
+    const bool svgfViews = settings.method == Method::Svgf || settings.method == Method::Detail;
     const auto keep = [frames](bool written) { return written ? frames : 0; };
     removeNumberedFiles(options.output, "result", ".exr", frames);
     removeNumberedFiles(options.output, "result", ".png", keep(options.png));
@@ -166,7 +167,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     if (!options.video.empty()) checkVideoPath(options);
     const std::unique_ptr<FrameSource> source =
         openFrameSource(options.input, FrameSourceOptions{options.viewLayer});
-    const bool history = settings.method == Method::Temporal || settings.method == Method::Svgf;
+    const bool history = usesHistory(settings.method);
     if (history && !source->backProjectionProblem().empty())
         throw Error(ErrorCode::InvalidInput,
                     fmt::format("{} (--method {} reprojects the previous frame)",
@@ -250,10 +251,9 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         if (stats.missingNormals > 0) missingNormals.emplace_back(i, stats.missingNormals);
 
         std::vector<std::pair<std::string, Image>> debug;
-        if (options.debug &&
-            (settings.method == Method::Temporal || settings.method == Method::Svgf)) {
+        if (options.debug && (usesHistory(settings.method))) {
             debug.emplace_back("reprojection", denoiser.debugImage(DebugView::Reprojection));
-            if (settings.method == Method::Svgf) {
+            if (settings.method == Method::Svgf || settings.method == Method::Detail) {
                 debug.emplace_back("variance", denoiser.debugImage(DebugView::Variance));
                 debug.emplace_back("history", denoiser.debugImage(DebugView::HistoryLength));
             }
@@ -342,7 +342,8 @@ void addTilePassesOption(CLI::App& command, TilePasses& target, const std::strin
 
 void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     // Named choices: the help shows the names and the default by name, not the enum values.
-    addChoice(c, "--method", s.method, kMethods, "Denoising method", "jbf|atrous|temporal|svgf");
+    addChoice(c, "--method", s.method, kMethods, "Denoising method",
+              "jbf|atrous|temporal|svgf|detail");
     addChoice(c, "--spatial-filter", s.temporal.spatialFilter, kFilters,
               "Spatial filter of the temporal method", "jbf|atrous");
     addChoice(c, "--device", s.device, kDevices,
@@ -411,6 +412,34 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
                  "[>=0] svgf anti-lag: clamp the colour history to mu +- k sigma of the current "
                  "7x7 neighbourhood and shorten it where lighting changed (0: off, the paper)")
         ->capture_default_str();
+    c.add_option("--detail-sigma-depth", s.detail.sigmaDepth,
+                 "[>=1e-6] detail depth tolerance (sigma_z)")
+        ->capture_default_str();
+    c.add_option("--detail-sigma-normal", s.detail.sigmaNormal,
+                 "[>=1e-6] detail normal exponent (sigma_n)")
+        ->capture_default_str();
+    c.add_option("--detail-sigma-luminance", s.detail.sigmaLuminance,
+                 "[>=1e-6] detail luminance tolerance in standard deviations of the accumulated "
+                 "mean")
+        ->capture_default_str();
+    c.add_option("--detail-iterations", s.detail.iterations, "[1,10] detail A-Trous iterations")
+        ->capture_default_str();
+    c.add_option("--detail-max-history", s.detail.maxHistory,
+                 "[1,1000] detail slow history length cap")
+        ->capture_default_str();
+    c.add_option("--detail-fast-history", s.detail.fastHistory,
+                 "[1,max-history] detail fast history length cap (the clamp's guide)")
+        ->capture_default_str();
+    c.add_option("--detail-clamp-sigma", s.detail.clampSigma,
+                 "[>=0] detail: slow history clamped to the fast one's 5x5 mean +- this many "
+                 "sigma (0: off)")
+        ->capture_default_str();
+    c.add_option("--detail-moments-alpha", s.detail.momentsAlpha,
+                 "[0,1] detail luminance moments: current-frame weight floor")
+        ->capture_default_str();
+    c.add_flag("--detail-anti-lag,!--no-detail-anti-lag", s.detail.antiLag,
+               "detail without a confidence input: follow the current frame where its 5x5 mean "
+               "leaves the fast history's (lighting changed; on by default)");
     c.add_flag("--albedo,!--no-albedo", s.albedo.demodulate,
                "Where albedo_<i>.exr exists, filter colour / albedo and multiply it back (on by "
                "default)");

@@ -111,6 +111,9 @@ Command addRenderCommand(CLI::App& app) {
         ->capture_default_str();
     c->add_flag("--gbuffer-only", s.gbufferOnly,
                 "Skip the reference: noisy beauty and G-buffers only");
+    c->add_flag("--confidence", s.confidence,
+                "Also confidence_<i>.exr: history confidence in [0, 1] from A-SVGF temporal "
+                "gradients (0 where the lighting changed; folder layout only)");
     c->add_option_function<std::string>(
          "--format",
          [&s](const std::string& value) {

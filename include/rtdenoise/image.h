@@ -68,6 +68,9 @@ struct Frame {
     // previous frame (NVIDIA NRD's convention: previous = current + motion). A third channel,
     // where given, is the point's previous depth minus its current one (same units as depth).
     std::optional<Image> motion;
+    // 1 channel in [0, 1], optional: how far the history of each pixel still holds (NVIDIA NRD's
+    // IN_DIFF_CONFIDENCE): 1 keeps it, 0 where the lighting changed (a light switched), drop it.
+    std::optional<Image> confidence;
     std::vector<Matrix4> objectToWorld;  // K matrices, object k's local-to-world (none: motion)
     // With motion vectors and no matrices: IDs are -1..objectCount-1 (0: objectToWorld.size()).
     int objectCount = 0;
@@ -135,6 +138,8 @@ struct OutputView {
 // - motion (optional): 2 channels in pixels, previous = current + motion (NVIDIA NRD's
 //   convention; DenoiserSettings::motion converts others), optionally a 3rd: previous depth minus
 //   current depth. With motion, no matrices are needed: objectCount alone bounds the IDs.
+// - confidence (optional): 1 channel in [0, 1], 1 where the history holds, 0 where the lighting
+//   changed (NRD's IN_DIFF_CONFIDENCE); a value outside [0, 1] is clamped, NaN reads as 1.
 struct FrameView {
     int width = 0;
     int height = 0;
@@ -147,6 +152,7 @@ struct FrameView {
     ImageView objectId;                      // -1 or 0..objectCount-1 (checked on the device)
     ImageView albedo;                        // optional
     ImageView motion;                        // optional: replaces the matrices
+    ImageView confidence;                    // optional: history confidence, 1 channel
     const Matrix4* objectToWorld = nullptr;  // objectCount matrices (unused with motion)
     int objectCount = 0;
     Matrix4 worldToCamera = Matrix4::identity();
@@ -168,6 +174,9 @@ inline FrameView viewOf(const Frame& frame) {
     if (frame.motion)
         v.motion =
             ImageView(frame.motion->pixels.data(), DataType::Float32, frame.motion->channels);
+    if (frame.confidence)
+        v.confidence = ImageView(frame.confidence->pixels.data(), DataType::Float32,
+                                 frame.confidence->channels);
     v.objectToWorld = frame.objectToWorld.data();
     v.objectCount = frame.objectCount > 0 ? frame.objectCount : int(frame.objectToWorld.size());
     v.worldToCamera = frame.worldToCamera;

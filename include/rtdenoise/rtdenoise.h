@@ -5,7 +5,8 @@
  *   RTDDenoiser den = rtdNewDenoiser(device, "svgf");
  *   rtdSetFloat(den, "sigma-color", 0.6f);                  // the command line's option names
  *   rtdSetImage(den, "color", rgb, RTD_FORMAT_FLOAT3, w, h, 0, 0);   // 0 strides: packed
- *   ... "normal", "position", "depth", "ids", optional "albedo", "motion"; "output"
+ *   ... "normal", "position", "depth", "ids", optional "albedo", "motion", "confidence";
+ *   "output"
  *   rtdSetMatrices(den, objectToWorld, objectCount, worldToCamera, worldToScreen);
  *   if (rtdExecute(den) != RTD_ERROR_NONE) { const char* m; rtdGetDeviceError(device, &m); }
  *   rtdReleaseDenoiser(den); rtdReleaseDevice(device);
@@ -132,6 +133,9 @@ RTD_API const char* rtdGetString(RTDDenoiser denoiser, const char* name);
  *   "motion"   optional, 2 or 3 values, pixels: previous = current + motion (NVIDIA NRD's
  *              convention; "motion-scale-x/y", "motion-current-minus-previous" convert others);
  *              with it no matrices are needed, rtdSetObjectCount bounds the IDs
+ *   "confidence" optional, 1 float or half value in [0, 1]: how far each pixel's history still
+ *              holds (NVIDIA NRD's IN_DIFF_CONFIDENCE; 0 where the lighting changed); values
+ *              outside are clamped, NaN reads as 1. Read by the methods with history
  *   "output"   the result, written: 3 or 4 values (alpha 1), float or half
  * Pixel (x, y) is at ptr + y * rowStride + x * pixelStride bytes, rows top to bottom; strides 0
  * mean packed. All images are width x height, in host memory, or all in the GPU's memory on a

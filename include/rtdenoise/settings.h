@@ -12,7 +12,13 @@ enum class Method {
     Atrous,    // single frame: edge-avoiding A-Trous wavelet filter
     Temporal,  // the assignment's pipeline: spatial filter, back-projection, accumulation
     Svgf,      // spatiotemporal variance-guided filtering (Schied et al. 2017)
+    Detail,    // detail-preserving history: SVGF's filter over unfiltered, clamped history
 };
+
+// Whether the method keeps a history (reprojects the last frame's).
+inline bool usesHistory(Method method) {
+    return method == Method::Temporal || method == Method::Svgf || method == Method::Detail;
+}
 
 enum class SpatialFilter { Jbf, Atrous };
 
@@ -82,6 +88,25 @@ struct SvgfSettings {
                                   // paper; 1.5 chosen on the rendered scenes, see README)
 };
 
+// The detail method (methods/detail.cpp): the colour history is the accumulated unfiltered signal
+// (a long "slow" one and a short "fast" one beside it, as in NVIDIA NRD's ReLAX); the slow one is
+// clamped to the fast one's neighbourhood, and the A-Trous filter's luminance tolerance follows
+// the variance of the accumulated mean, so it narrows as the history grows.
+struct DetailSettings {
+    float sigmaDepth = 1.0f;      // [>=kMinSigma] depth tolerance relative to the local depth slope
+    float sigmaNormal = 128.0f;   // [>=kMinSigma] exponent of max(0, n.n')
+    float sigmaLuminance = 4.0f;  // [>=kMinSigma] luminance tolerance in standard deviations of
+                                  // the accumulated mean
+    int iterations = 5;           // [1, 10] A-Trous iterations, stride 2^i
+    int maxHistory = 32;          // [1, 1000] slow history cap (frames)
+    int fastHistory = 4;          // [1, max-history] fast history cap (frames): the clamp's guide
+    float clampSigma = 2.0f;      // [>=0] slow history clamped to the fast one's 5x5 mean +- this
+                                  // many standard deviations (0: no clamp)
+    float momentsAlpha = 0.2f;    // [0, 1] luminance moments: weight of the current frame
+    bool antiLag = true;          // without a confidence input: where the current frame's 5x5
+                                  // mean leaves the fast history's, follow it (lighting changed)
+};
+
 // Albedo demodulation (every method): where a frame has an albedo, filter the illumination
 // colour / max(albedo, epsilon) and multiply the albedo back at the end, so that texture detail
 // is not blurred. Frames without an albedo are filtered as they are.
@@ -108,6 +133,7 @@ struct DenoiserSettings {
     HistorySettings history;
     MotionSettings motion;
     SvgfSettings svgf;
+    DetailSettings detail;
     AlbedoSettings albedo;
 };
 

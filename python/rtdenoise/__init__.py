@@ -128,6 +128,7 @@ class Frame:
     ids: np.ndarray  # (H, W) int32 object IDs, -1 on background
     albedo: Optional[np.ndarray] = None  # (H, W, 3)
     motion: Optional[np.ndarray] = None  # (H, W, 2 or 3) pixels: previous = current + motion
+    confidence: Optional[np.ndarray] = None  # (H, W) history confidence in [0, 1]
     matrices: Optional[Matrices] = None  # None for Blender's files (they have motion)
     depth_kind: str = "view-z"  # or "ray-distance"
     object_count: int = 0  # IDs are -1..object_count-1
@@ -147,6 +148,7 @@ class Frame:
             ids=self.ids,
             albedo=self.albedo,
             motion=self.motion,
+            confidence=self.confidence,
             matrices=self.matrices,
             depth_kind=self.depth_kind,
             object_count=self.object_count,
@@ -456,6 +458,7 @@ class Denoiser:
         matrices: Any = None,
         out: Optional[np.ndarray] = None,
         *,
+        confidence: Any = None,
         depth_kind: Optional[str] = None,
         object_count: Optional[int] = None,
     ) -> np.ndarray:
@@ -469,6 +472,8 @@ class Denoiser:
         motion (H, W, 2 or 3): pixels, previous = current + motion; or matrices (a Matrices,
         a mapping, a frame's): object_to_world (K, 4, 4), world_to_camera, world_to_screen.
         object_count: with motion and no matrices, IDs are -1..object_count-1 (None: max + 1).
+        confidence (H, W): optional history confidence in [0, 1] (NRD's IN_DIFF_CONFIDENCE: 0
+        where the lighting changed, drop the history; clamped, NaN as 1).
         out: an (H, W, 3 or 4) float32 or float16 array to write (4: alpha 1; give out[..., :3]
         to keep its alpha).
 
@@ -525,6 +530,10 @@ class Denoiser:
                 ids = ids.astype(np.float32)
         if albedo is not None:
             albedo = _image("albedo", albedo, size, (3, 4), like)
+        if confidence is not None:
+            confidence = _image("confidence", confidence, size, (1,), like)
+            if confidence.dtype.kind != "f":
+                confidence = confidence.astype(np.float32)
         if object_count is None:
             object_count = _object_count_of(ids)
         if matrices is None and motion is None:
@@ -543,6 +552,7 @@ class Denoiser:
             "ids": (ids, 1),
             "albedo": (albedo, 0 if albedo is None else albedo.shape[2]),
             "motion": (motion, 0 if motion is None else motion.shape[2]),
+            "confidence": (confidence, 1),
         }
         with self._exclusive():
             if kind != self._depth_kind:

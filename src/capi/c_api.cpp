@@ -182,6 +182,15 @@ const SettingEntry kSettings[] = {
     RTD_SETTING("svgf-feedback", Int, svgf.feedbackIteration),
     RTD_SETTING("svgf-max-history", Int, svgf.maxHistory),
     RTD_SETTING("svgf-clamp-k", Float, svgf.historyClampK),
+    RTD_SETTING("detail-sigma-depth", Float, detail.sigmaDepth),
+    RTD_SETTING("detail-sigma-normal", Float, detail.sigmaNormal),
+    RTD_SETTING("detail-sigma-luminance", Float, detail.sigmaLuminance),
+    RTD_SETTING("detail-iterations", Int, detail.iterations),
+    RTD_SETTING("detail-max-history", Int, detail.maxHistory),
+    RTD_SETTING("detail-fast-history", Int, detail.fastHistory),
+    RTD_SETTING("detail-clamp-sigma", Float, detail.clampSigma),
+    RTD_SETTING("detail-moments-alpha", Float, detail.momentsAlpha),
+    RTD_SETTING("detail-anti-lag", Bool, detail.antiLag),
     RTD_SETTING("albedo", Bool, albedo.demodulate),
     RTD_SETTING("albedo-epsilon", Float, albedo.epsilon),
     RTD_SETTING("outlier", Bool, outlier.enabled),
@@ -226,16 +235,27 @@ Enum enumNamed(const char* setting, const char* value, std::initializer_list<Enu
 }
 
 rtd::Method methodNamed(const char* name) {
-    return enumNamed(
-        "method", name,
-        {rtd::Method::Jbf, rtd::Method::Atrous, rtd::Method::Temporal, rtd::Method::Svgf});
+    return enumNamed("method", name,
+                     {rtd::Method::Jbf, rtd::Method::Atrous, rtd::Method::Temporal,
+                      rtd::Method::Svgf, rtd::Method::Detail});
 }
 
 // ---- images by name ----
 
-enum ImageSlot { kColor, kNormal, kPosition, kDepth, kIds, kAlbedo, kMotion, kOutput, kSlots };
-const char* const kImageNames[kSlots] = {"color", "normal", "position", "depth",
-                                         "ids",   "albedo", "motion",   "output"};
+enum ImageSlot {
+    kColor,
+    kNormal,
+    kPosition,
+    kDepth,
+    kIds,
+    kAlbedo,
+    kMotion,
+    kConfidence,
+    kOutput,
+    kSlots
+};
+const char* const kImageNames[kSlots] = {"color",  "normal", "position",   "depth", "ids",
+                                         "albedo", "motion", "confidence", "output"};
 
 struct BoundImage {
     const void* data = nullptr;
@@ -269,7 +289,7 @@ void checkFormat(ImageSlot slot, RTDFormat format) {
              fmt::format("{}: format {} is not an RTDFormat", kImageNames[slot], int(format)));
     int lowest = 3, highest = 4;
     const char* expected = "3 or 4 float or half values (RTD_FORMAT_FLOAT3/4, HALF3/4)";
-    if (slot == kDepth) {
+    if (slot == kDepth || slot == kConfidence) {
         lowest = highest = 1;
         expected = "1 float or half value (RTD_FORMAT_FLOAT, HALF)";
     } else if (slot == kIds) {
@@ -338,7 +358,7 @@ rtd::Matrix4 matrixOf(const float* m) {
 }
 
 bool reprojects(rtd::Method method) {
-    return method == rtd::Method::Temporal || method == rtd::Method::Svgf;
+    return rtd::usesHistory(method);
 }
 
 void execute(RTDDenoiser d) {
@@ -387,6 +407,7 @@ void execute(RTDDenoiser d) {
     view.objectId = viewOf(d->images[kIds]);
     view.albedo = viewOf(d->images[kAlbedo]);
     view.motion = viewOf(d->images[kMotion]);
+    view.confidence = viewOf(d->images[kConfidence]);
     view.objectCount = d->objectCount;
     // The single-frame methods never reproject: without matrices, identities stand for them.
     if (!d->hasMatrices && !motion)
@@ -693,7 +714,7 @@ RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat
         if (slot == kSlots)
             fail(RTD_ERROR_INVALID_ARGUMENT,
                  fmt::format("unknown image '{}' (images: color, normal, position, depth, ids, "
-                             "albedo, motion, output)",
+                             "albedo, motion, confidence, output)",
                              name));
         if (!ptr) {  // unset
             d->images[slot] = BoundImage{};

@@ -7,6 +7,7 @@
 #include "kernels/accumulate.h"
 #include "kernels/atrous.h"
 #include "kernels/convert.h"
+#include "kernels/detail.h"
 #include "kernels/ingest.h"
 #include "kernels/jbf.h"
 #include "kernels/modulate.h"
@@ -28,6 +29,8 @@ enum class StepKind {
     SvgfTemporalStage,
     SvgfVariance,
     SvgfAtrousIteration,
+    DetailTemporalStage,
+    DetailClamp,
     Modulate,
 };
 
@@ -103,6 +106,19 @@ struct SvgfVarianceStep {
 struct SvgfAtrousIterationStep {
     SvgfAtrousModulatedKernel iteration;
     bool modulated = false;
+};
+
+// The detail method's reprojection (with the 3x3 search) and accumulation of both histories.
+// reproject.history and accumulate.history are the device's to fill (working planes).
+struct DetailTemporalStageStep {
+    DetailReprojectKernel reproject;
+    DetailAccumulateKernel accumulate;
+};
+
+// The clamp and anti-lag, then the anti-lag's ratio applied to the fast history.
+struct DetailClampStep {
+    DetailClampKernel clamp;
+    DetailScaleKernel scale;
 };
 
 struct ModulateStep {

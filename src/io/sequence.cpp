@@ -24,6 +24,9 @@ const std::vector<std::vector<std::string>> kRgb = {{"R"}, {"G"}, {"B"}};
 // Scalar buffers: the course data uses Y; other producers write Z, R or a layer prefix.
 const std::vector<std::vector<std::string>> kDepth = {{"Y", "Z", "R", "depth.Y", "depth.Z"}};
 const std::vector<std::vector<std::string>> kId = {{"Y", "R", "ID.Y", "id.Y"}};
+// History confidence: 1 channel; of an RGB file its R (a grey image holds it in every channel).
+const std::vector<std::vector<std::string>> kConfidence = {
+    {"Y", "R", "confidence.Y", "confidence.R", "A"}};
 
 // IDs are stored as floats; anything further than this from an integer is a broken file.
 constexpr float kIdTolerance = 1e-3f;
@@ -210,6 +213,8 @@ Frame Sequence::readFrame(int index) const {
 
     const std::filesystem::path albedoFile = path("albedo", ".exr");
     if (hasEntry(albedoFile)) frame.albedo = readChecked(albedoFile, kRgb);
+    const std::filesystem::path confidenceFile = path("confidence", ".exr");
+    if (hasEntry(confidenceFile)) frame.confidence = readChecked(confidenceFile, kConfidence);
     return frame;
 }
 
@@ -251,6 +256,8 @@ std::vector<ExrSize> Sequence::checkFrames(int count) const {
         checkSize(path("depth", ".exr"), kDepth);
         checkSize(path("ID", ".exr"), kId);
         if (hasEntry(path("albedo", ".exr"))) checkSize(path("albedo", ".exr"), kRgb);
+        if (hasEntry(path("confidence", ".exr")))
+            checkSize(path("confidence", ".exr"), kConfidence);
         sizes.push_back(beauty);
     }
     return sizes;
@@ -271,6 +278,7 @@ void writeFrame(const std::filesystem::path& folder, int index, const Frame& fra
         ids.pixels[i] = float(frame.objectId[i]);
     writeExr(path("ID", ".exr"), ids);
     if (frame.albedo) writeExr(path("albedo", ".exr"), *frame.albedo);
+    if (frame.confidence) writeExr(path("confidence", ".exr"), *frame.confidence);
     writeMatrixFile(path("matrix", ".mat"),
                     MatrixFile{frame.objectToWorld, frame.worldToCamera, frame.worldToScreen});
 }

@@ -92,6 +92,14 @@ struct InputSpan {
     }
 };
 
+// The caller's history confidence (FrameBinding::confidence, its first channel) at (x, y), as
+// the kernels should read it: clamped to [0, 1], NaN as 1 (as if none were given), 1 when absent.
+RTD_HOST_DEVICE RTD_INLINE float loadConfidence(const InputSpan& confidence, int x, int y) {
+    if (!confidence.data) return 1.0f;
+    const float v = confidence.load(x, y, 0);
+    return v >= 0.0f ? (v < 1.0f ? v : 1.0f) : (v < 0.0f ? 0.0f : 1.0f);
+}
+
 // An image of the caller's as packed floats (`channels` per pixel: the first ones of the input,
 // 0 beyond its own). As IDs (toIds): packed int32, a float ID rounded to the nearest integer,
 // one that is not finite or not near an integer becoming kUnreadableId (the ingest flags it).

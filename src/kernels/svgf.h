@@ -1,10 +1,10 @@
 // Spatiotemporal variance-guided filtering (Schied et al., HPG 2017; reference: Falcor's
 // SVGFPass). Its kernels in one header (~600 lines): they share the centre, weight and history
-// helpers, and each has a CPU and a GPU form over the same arithmetic. Albedo demodulation happens in the ingest and modulation in ModulateKernel, for
-// every method. Passes: temporal (reproject, accumulate illumination and the
-// luminance moments with a per-pixel history length), variance (temporal from the moments, or a
-// 7x7 edge-aware spatial estimate where the history is short), A-Trous iterations guided by the
-// variance.
+// helpers, and each has a CPU and a GPU form over the same arithmetic. Albedo demodulation happens
+// in the ingest and modulation in ModulateKernel, for every method. Passes: temporal (reproject,
+// accumulate illumination and the luminance moments with a per-pixel history length), variance
+// (temporal from the moments, or a 7x7 edge-aware spatial estimate where the history is short),
+// A-Trous iterations guided by the variance.
 //
 // The moments are kept as (mean, variance) of the luminance rather than the paper's (m1, m2):
 // the same exponential averages (var = m2 - m1^2 exactly), updated in the stable form
@@ -95,6 +95,31 @@ static_assert(kSvgfWindowRadius <= kNarrowWindow, "the window sums' narrow insta
 constexpr int kPaperSigmaNormal = 128;
 RTD_HOST_DEVICE RTD_INLINE bool hasPaperSigmaNormal(const SvgfTerms& t) {
     return t.sigmaNormal == float(kPaperSigmaNormal);
+}
+
+// SVGF's anti-lag: history outside what the current frame's neighbourhood allows (a light
+// switched, a shadow moved) is pulled into mu +- k sigma of the current noisy window (rowSums:
+// ColorRowSumsKernel's); ordinary history, inside the wide 1-spp spread, is untouched. Where
+// the history is further from the neighbourhood's mean than that mean's own noise allows (3
+// standard errors, the mean of `count` samples), the history length is scaled by
+// (1 - relative change beyond that)^4 (the power chosen on the rendered scenes), so alpha = 1/h
+// rises and the new lighting is taken up within a frame or two: a cheap stand-in for A-SVGF's
+// temporal gradients.
+struct AntiLag {
+    Float3 history;     // clamped
+    float lengthScale;  // the history length's factor, in [0, 1]
+};
+RTD_HOST_DEVICE RTD_INLINE AntiLag antiLagOf(const PlaneSet& rowSums, PixelIndex i, int pitch,
+                                             int radius, float k, Float3 history) {
+    ColorWindowStats w = colorWindowStats<kNarrowWindow>(rowSums, i, pitch, radius);
+    float meanL = luminance(w.mean);
+    float standardError = luminance(w.sigma) / std::sqrt(w.count);
+    float historyL = luminance(history);
+    float gap =
+        maxf((historyL > meanL ? historyL - meanL : meanL - historyL) - 3.0f * standardError, 0.0f);
+    float change = minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f);
+    return {clamp3(history, w.mean - w.sigma * k, w.mean + w.sigma * k),
+            square(square(1.0f - change))};
 }
 
 // The temporal stage is three passes: reprojection (every pixel, bilinear taps), its 3x3 search
@@ -221,31 +246,14 @@ struct SvgfAccumulateKernel {
         float l = luminance(current);
         Float3 previous = s.rgb;
         float mean = s.mean, variance = s.variance, h = s.length;
-        {
-            // Anti-lag (clampK > 0): history outside what the current frame's neighbourhood
-            // allows (a light switched, a shadow moved) is pulled into mu +- k sigma; ordinary
-            // history, inside the wide 1-spp spread, is untouched. Selects, not an `if`, so the
-            // kernel stays vectorisable (the window sums exist whenever clampK > 0).
-            bool antiLag = clampK > 0.0f;
-            ColorWindowStats w = colorWindowStats<kNarrowWindow>(rowSums, i, L.pitch, clampRadius);
-            // Lighting changed where the history is further from the neighbourhood's mean than
-            // that mean's own noise allows (3 standard errors, the mean of `count` samples):
-            // the history length is scaled by (1 - relative change beyond that)^4 (the power
-            // chosen on the rendered scenes), so alpha = 1/h rises and the new lighting is taken
-            // up within a frame or two: a cheap stand-in for A-SVGF's temporal gradients.
-            float meanL = luminance(w.mean);
-            float standardError = luminance(w.sigma) / std::sqrt(w.count);
-            float historyL = luminance(previous);
-            float gap = maxf(
-                (historyL > meanL ? historyL - meanL : meanL - historyL) - 3.0f * standardError,
-                0.0f);
-            float change = antiLag ? minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f) : 0.0f;
-            h *= square(square(1.0f - change));
-            Float3 clamped = clamp3(previous, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
-            previous.x = antiLag ? clamped.x : previous.x;
-            previous.y = antiLag ? clamped.y : previous.y;
-            previous.z = antiLag ? clamped.z : previous.z;
-        }
+        // Anti-lag (clampK > 0). Selects, not an `if`, so the kernel stays vectorisable (the
+        // window sums exist whenever clampK > 0).
+        const bool antiLag = clampK > 0.0f;
+        const AntiLag lag = antiLagOf(rowSums, i, L.pitch, clampRadius, clampK, previous);
+        h *= antiLag ? lag.lengthScale : 1.0f;
+        previous.x = antiLag ? lag.history.x : previous.x;
+        previous.y = antiLag ? lag.history.y : previous.y;
+        previous.z = antiLag ? lag.history.z : previous.z;
         // A new history (disocclusion, first frame) starts at 1 frame: alpha 1, the current
         // sample alone. Background: passed through, no history.
         h = valid ? minf(h + 1.0f, maxHistory) : 1.0f;

@@ -29,6 +29,7 @@ FrameImages declareJbf(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareAtrous(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareTemporal(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareSvgf(Pipeline& pipeline, const DenoiserSettings& settings);
+FrameImages declareDetail(Pipeline& pipeline, const DenoiserSettings& settings);
 
 // ---- shared passes ----
 

@@ -63,6 +63,9 @@ struct FrameBinding {
     const std::int32_t* objectId = nullptr;
     const float* albedo = nullptr;  // null: no demodulation
     InputSpan motion;               // the caller's motion vectors (data null: the matrices)
+    // The caller's history confidence, 1 channel in [0, 1] (data null: none): 0 where the
+    // lighting changed and the history should be dropped (NRD's IN_DIFF_CONFIDENCE).
+    InputSpan confidence;
     int objectCount = 0;
     const ObjectReprojection* objects = nullptr;  // the matrices, one per object
     int hasHistory = 0;

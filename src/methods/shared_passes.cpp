@@ -33,6 +33,8 @@ FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings) 
             return declareTemporal(pipeline, settings);
         case Method::Svgf:
             return declareSvgf(pipeline, settings);
+        case Method::Detail:
+            return declareDetail(pipeline, settings);
     }
     throw Error(ErrorCode::InvalidArgument, "settings: unknown method");
 }
@@ -104,7 +106,7 @@ FrameImages declareIngest(Pipeline& p, const DenoiserSettings& settings) {
                             .fillByte = 0xff});
     f.filterKeys = p.declare({.name = "filterKeys", .element = Element::Int32, .fillByte = 0xff});
     f.inputFlags = p.declare({.name = "inputFlags", .element = Element::Byte, .padded = false});
-    bool temporal = settings.method == Method::Temporal || settings.method == Method::Svgf;
+    bool temporal = usesHistory(settings.method);
     if (temporal || settings.outlier.enabled) f.windowSums = p.declare(floatImage("windowSums", 7));
     std::vector<ResourceId> writes = {f.noisy,    f.albedo,     f.guide,     f.position,
                                       f.objectId, f.filterKeys, f.inputFlags};

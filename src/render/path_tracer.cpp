@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace rtd::render {
@@ -593,6 +595,33 @@ Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng) {
     return result;
 }
 
+// Gauss-Jordan with partial pivoting (in double); a singular matrix (a zero scale) gives none.
+std::optional<Matrix4> inverseOf(const Matrix4& m) {
+    double a[4][8] = {};
+    for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 4; ++j) a[i][j] = m.m[i][j];
+        a[i][4 + i] = 1.0;
+    }
+    for (int col = 0; col < 4; ++col) {
+        int pivot = col;
+        for (int row = col + 1; row < 4; ++row)
+            if (std::abs(a[row][col]) > std::abs(a[pivot][col])) pivot = row;
+        if (std::abs(a[pivot][col]) < 1e-12) return std::nullopt;
+        std::swap(a[col], a[pivot]);
+        const double scale = 1.0 / a[col][col];
+        for (double& v : a[col]) v *= scale;
+        for (int row = 0; row < 4; ++row) {
+            if (row == col) continue;
+            const double factor = a[row][col];
+            for (int j = 0; j < 8; ++j) a[row][j] -= factor * a[col][j];
+        }
+    }
+    Matrix4 r;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) r.m[i][j] = float(a[i][4 + j]);
+    return r;
+}
+
 }  // namespace
 
 Image renderRadiance(const Scene& scene, const TraceSettings& settings) {
@@ -620,6 +649,68 @@ Image renderRadiance(const Scene& scene, const TraceSettings& settings) {
         }
     }
     return image;
+}
+
+std::vector<GradientSample> traceGradientSamples(const Scene& previous, const Scene& current,
+                                                 const TraceSettings& last,
+                                                 const std::vector<PixelCoord>& pixels) {
+    CompiledScene before(previous), now(current);
+    const int w = last.width, h = last.height;
+    const CameraFrame cameraBefore = cameraFrame(previous.camera, w, h);
+    const CameraFrame cameraNow = cameraFrame(current.camera, w, h);
+    const Matrix4 toScreenNow = worldToScreen(current.camera, w, h);
+    const bool cameraMoved = std::memcmp(&cameraBefore, &cameraNow, sizeof(CameraFrame)) != 0;
+    // Per object: previous world -> local -> current world (none: it cannot be inverted).
+    std::vector<std::optional<Matrix4>> carry;
+    std::vector<bool> moved;
+    for (std::size_t k = 0; k < previous.objects.size() && k < current.objects.size(); ++k) {
+        const Matrix4& from = previous.objects[k].objectToWorld;
+        const Matrix4& to = current.objects[k].objectToWorld;
+        std::optional<Matrix4> toLocal = inverseOf(from);
+        carry.push_back(toLocal ? std::optional<Matrix4>(to * *toLocal) : std::nullopt);
+        moved.push_back(from.m != to.m);
+    }
+    std::vector<GradientSample> out(pixels.size());
+#pragma omp parallel for schedule(dynamic, 64)
+    for (std::ptrdiff_t i = 0; i < std::ptrdiff_t(pixels.size()); ++i) {
+        const PixelCoord p = pixels[std::size_t(i)];
+        GradientSample& g = out[std::size_t(i)];
+        std::uint64_t pixel = std::uint64_t(p.y) * std::uint64_t(w) + std::uint64_t(p.x);
+        Rng rng = sampleRng(last, pixel, 0);
+        float px = float(p.x) + rng.uniform(), py = float(p.y) + rng.uniform();
+        const Rng afterJitter = rng;  // the path's own random numbers, for the re-shading
+        Ray ray{cameraBefore.position, cameraBefore.direction(px, py)};
+        const Hit first = before.closest(ray);
+        if (first.object < 0 || std::size_t(first.object) >= carry.size() || !carry[first.object])
+            continue;
+        Vec3 l = radiance(before, ray, last.maxDepth, rng);
+        g.before = isFinite(l) ? l : Vec3(0.0f);
+        // Nothing moved: the very same ray, so that a still scene re-shades to the same value.
+        Ray again = ray;
+        if (cameraMoved || moved[first.object]) {
+            const Vec3 point = before.surface(ray, first).position;
+            const Vec4 moved4 = transformPoint(*carry[first.object], point);
+            const Vec3 movedPoint{moved4.x, moved4.y, moved4.z};
+            const Vec4 s = transformPoint(toScreenNow, movedPoint);
+            if (!(s.w > 0.0f)) continue;
+            const float sx = s.x / s.w, sy = s.y / s.w;
+            if (!(sx >= 0.0f && sx < float(w) && sy >= 0.0f && sy < float(h))) continue;
+            px = sx;
+            py = sy;
+            const Vec3 toPoint = movedPoint - cameraNow.position;
+            const float distance = length(toPoint);
+            again = {cameraNow.position, toPoint / distance};
+            const Hit seen = now.closest(again);
+            if (seen.object != first.object || std::abs(seen.t - distance) > 1e-3f * distance)
+                continue;  // hidden now: a disocclusion, which reprojection handles
+        }
+        Rng same = afterJitter;
+        l = radiance(now, again, last.maxDepth, same);
+        g.now = isFinite(l) ? l : Vec3(0.0f);
+        g.pixel = {std::min(w - 1, int(px)), std::min(h - 1, int(py))};
+        g.valid = true;
+    }
+    return out;
 }
 
 Frame renderGBuffer(const Scene& scene, int width, int height) {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "render/scene.h"
 #include "rtdenoise/image.h"
@@ -31,6 +32,26 @@ constexpr std::uint32_t kReferenceStream = 1;
 // Mean radiance of `samplesPerPixel` camera paths per pixel, each through a uniformly jittered
 // point of the pixel; 3 channels. Nothing is clamped; a non-finite sample counts as 0.
 Image renderRadiance(const Scene& scene, const TraceSettings& settings);
+
+struct PixelCoord {
+    int x = 0;
+    int y = 0;
+};
+
+// A-SVGF's gradient sample of a pixel: last frame's camera sample 0 (the random numbers of
+// `last`: seed, beauty stream, frameIndex of the previous frame) traced in its scene, and the same
+// path re-shaded in the current scene from where its first hit's surface point is now (moved
+// with its object, seen from the current camera). Invalid where that path starts on background,
+// or the point is now off-screen or hidden.
+struct GradientSample {
+    bool valid = false;
+    PixelCoord pixel;  // where the point is now
+    Vec3 before;       // the radiance last frame (what the beauty added up)
+    Vec3 now;          // the same random numbers from the same surface point, now
+};
+std::vector<GradientSample> traceGradientSamples(const Scene& previous, const Scene& current,
+                                                 const TraceSettings& last,
+                                                 const std::vector<PixelCoord>& pixels);
 
 // G-buffer from the primary ray through each pixel centre: normal (world, unit, facing the
 // camera), position (the camera position on background), depth (camera z, 0 on background),

@@ -9,6 +9,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "render/confidence.h"
 #include "render/path_tracer.h"
 #include "render/scenes.h"
 #include "rtdenoise/error.h"
@@ -118,8 +119,8 @@ std::string sceneJson(const SceneDefinition& d, const RenderSettings& s,
 // "<prefix>_<n>.<ext>" of the layout with n >= frames: left from an earlier, longer render they
 // would be read as part of this sequence.
 void removeStaleFrames(const fs::path& folder, int frames) {
-    static const std::string_view kStems[] = {"beauty", "albedo", "normal",   "position",
-                                              "depth",  "ID",     "reference"};
+    static const std::string_view kStems[] = {"beauty", "albedo", "normal",    "position",
+                                              "depth",  "ID",     "reference", "confidence"};
     for (std::string_view stem : kStems) removeNumberedFiles(folder, stem, ".exr", frames);
     removeNumberedFiles(folder, "matrix", ".mat", frames);
 }
@@ -226,6 +227,10 @@ void validate(const RenderSettings& s) {
     check(s.referenceSpp >= 1 && s.referenceSpp <= 1 << 20, "reference spp", s.referenceSpp,
           "1..1048576");
     check(s.maxDepth >= 1 && s.maxDepth <= 64, "max depth", s.maxDepth, "1..64");
+    if (s.confidence && s.format == OutputFormat::Multilayer)
+        throw Error(ErrorCode::InvalidArgument,
+                    "confidence is written in the folder layout only (Blender's files have no "
+                    "such pass)");
 }
 
 Image screenMotion(const Frame& frame, const Scene& current, const Scene& other) {
@@ -272,7 +277,11 @@ Image screenMotion(const Frame& frame, const Scene& current, const Scene& other)
 }
 
 double pathCount(const RenderSettings& s) {
-    return double(s.width) * s.height * s.frames * (s.spp + (s.gbufferOnly ? 0 : s.referenceSpp));
+    const double pixels = double(s.width) * s.height;
+    // Confidence: 2 paths per 3x3 stratum on every frame but the first.
+    const double strata = double((s.width + 2) / 3) * double((s.height + 2) / 3);
+    const double confidencePaths = s.confidence ? 2.0 * strata * (s.frames - 1) : 0.0;
+    return pixels * s.frames * (s.spp + (s.gbufferOnly ? 0 : s.referenceSpp)) + confidencePaths;
 }
 
 void renderSequence(const std::string& sceneName, const RenderSettings& settings,
@@ -298,6 +307,8 @@ void renderSequence(const std::string& sceneName, const RenderSettings& settings
     const bool multilayer = settings.format == OutputFormat::Multilayer;
     const int kept = settings.gbufferOnly ? 0 : settings.frames;
     removeStaleFrames(outDir, multilayer ? 0 : settings.frames);
+    // Without confidence none of an earlier render's may stay to be read as this one's.
+    if (!settings.confidence) removeNumberedFiles(outDir, "confidence", ".exr", 0);
     removeStaleMultilayerFrames(outDir, multilayer ? settings.frames : 0);
     if (fs::is_directory(referenceDir)) {
         removeStaleFrames(referenceDir, multilayer ? 0 : kept);
@@ -318,6 +329,9 @@ void renderSequence(const std::string& sceneName, const RenderSettings& settings
         trace.frameIndex = i;
         trace.stream = kBeautyStream;
         Frame frame = renderFrame(scenes[i], trace);
+        if (settings.confidence)
+            frame.confidence = i == 0 ? Image(settings.width, settings.height, 1, 1.0f)
+                                      : historyConfidence(scenes[i - 1], scenes[i], frame, trace);
         if (multilayer) {
             const Scene& previous = i > 0 ? scenes[i - 1] : beforeFirst;
             const Scene& next = i + 1 < settings.frames ? scenes[i + 1] : afterLast;

@@ -28,6 +28,9 @@ struct RenderSettings {
     std::uint32_t seed = 1;
     int maxDepth = 8;          // surface interactions per path
     bool gbufferOnly = false;  // beauty and G-buffers only: no reference
+    // Also confidence_<i>.exr (folder layout only): the history confidence of A-SVGF's temporal
+    // gradients (render/confidence.h), 1 on frame 0; about 2/9 more paths than a 1-spp beauty.
+    bool confidence = false;
     OutputFormat format = OutputFormat::Folder;
 };
 
@@ -37,7 +40,8 @@ struct SceneInfo {
 std::vector<SceneInfo> listScenes();
 
 // Writes, for i = 0..frames-1, beauty_i.exr, albedo_i.exr, normal_i.exr, position_i.exr,
-// depth_i.exr, ID_i.exr, matrix_i.mat and (unless gbufferOnly) reference/reference_i.exr, plus
+// depth_i.exr, ID_i.exr, matrix_i.mat, confidence_i.exr (with `confidence`) and (unless
+// gbufferOnly) reference/reference_i.exr, plus
 // scene.json describing the render (written last). With OutputFormat::Multilayer, frame i is
 // instead the Blender-style multilayer <i+1>.exr (0001.exr ..., writeBlenderExr: motion vectors
 // from the matrices of frames i-1 and i+1) and its reference reference/<i+1>.exr (R, G, B).

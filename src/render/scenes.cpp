@@ -252,6 +252,34 @@ Scene switchingLight(int frame) {
     return s;
 }
 
+// (e) A mirror-like sphere and a glossy metal one on a glossy floor, in a room with striped and
+// checkered walls, under a camera that trucks sideways and orbits: reflections move across the
+// surfaces that hold them (the surface's motion is not the reflection's), so a history that
+// follows the surface smears them.
+Scene reflections(int frame) {
+    Scene s;
+    RoomMaterials m;
+    m.floor = glossy(Texture::checker({0.7f, 0.7f, 0.7f}, {0.15f, 0.15f, 0.15f}, 3.0f), 0.3f, 400);
+    m.ceiling = m.front = diffuse(kWhite);
+    m.back = textured(Texture::stripes(kWhite, {0.2f, 0.3f, 0.6f}, 5.0f));
+    m.left = textured(Texture::checker(kRed, {0.9f, 0.85f, 0.7f}, 4.0f));
+    m.right = textured(Texture::stripes(kGreen, {0.9f, 0.85f, 0.7f}, 6.0f));
+    addRoom(s, {-2.5f, 0.0f, -4.0f}, {2.5f, 2.8f, 2.5f}, m, true);
+    s.objects.push_back(ceilingLight("light", {0.0f, 2.78f, 0.3f}, 1.2f, 1.2f, {14, 13, 11}));
+    s.objects.push_back(sphereObject("mirror sphere", {-0.75f, 0.6f, 0.8f}, 0.6f,
+                                     glossy(Texture::constant({0.9f, 0.9f, 0.9f}), 0.95f, 5000)));
+    s.objects.push_back(sphereObject("metal sphere", {0.9f, 0.45f, 0.2f}, 0.45f,
+                                     glossy(Texture::constant({0.8f, 0.6f, 0.3f}), 0.8f, 300)));
+    s.objects.push_back(boxObject("block", {0.2f, 0.0f, 1.4f}, {1.0f, 0.8f, 2.0f},
+                                  textured(Texture::checker(kWhite, {0.2f, 0.2f, 0.25f}, 8.0f))));
+    float a = phase(frame, 40);
+    Vec3 position{1.2f * std::sin(a), 1.3f, -3.0f + 0.4f * std::cos(a)};
+    s.camera.position = position;
+    s.camera.target = {0.2f * std::sin(a), 0.6f, 0.8f};
+    s.camera.verticalFovDegrees = 50.0f;
+    return s;
+}
+
 // The white furnace of the tests (scenes.h).
 Scene furnace(int) {
     Scene s;
@@ -289,6 +317,10 @@ const std::vector<SceneDefinition>& builtInScenes() {
          "the ceiling light is on for frames 0-5, off for 6-11, and so on; a small sphere light "
          "circles under the ceiling (period 32 frames)",
          switchingLight},
+        {"reflections",
+         "a mirror-like and a glossy metal sphere on a glossy floor under a moving camera "
+         "(reflections smear: they move unlike the surfaces that hold them)",
+         "the camera trucks 2.4 m sideways and orbits the spheres (period 40 frames)", reflections},
         {"furnace",
          "white furnace: camera inside a sphere of albedo 0.5 and emission 0.5 (radiance "
          "1 - 0.5^depth, the renderer's known-answer test)",

@@ -64,6 +64,7 @@ class CpuDevice final : public Device {
             planes(reprojected_, 3);
         }
         if (has(StepKind::SvgfTemporalStage)) planes(svgfHistory_, kSvgfHistoryPlanes);
+        if (has(StepKind::DetailTemporalStage)) planes(detailHistory_, kDetailHistoryPlanes);
     }
 
     void run(const IngestStep& s) override {
@@ -128,6 +129,25 @@ class CpuDevice final : public Device {
             sigma128 ? launch(svgfAtrousForm<kPaperSigmaNormal, false, false>(k))
                      : launch(svgfAtrousForm<-1, false, false>(k));
     }
+    // Split as SVGF's: the vectorised bilinear reprojection, the sparse 3x3 search, the
+    // vectorised accumulation.
+    void run(const DetailTemporalStageStep& s) override {
+        DetailReprojectKernel reproject = s.reproject;
+        reproject.history = {detailHistory_.data(), layout_.planeSize};
+        launch(reproject);
+        launch(DetailReprojectSearchKernel{
+            reproject.g, reproject.previous, reproject.objects, reproject.objectCount,
+            reproject.derivatives, reproject.test, reproject.previousSlow, reproject.previousFast,
+            reproject.previousMoments, reproject.previousLength, reproject.history,
+            reproject.validity, reproject.hasHistory});
+        DetailAccumulateKernel accumulate = s.accumulate;
+        accumulate.history = reproject.history;
+        launch(accumulate);
+    }
+    void run(const DetailClampStep& s) override {
+        launch(s.clamp);
+        launch(s.scale);
+    }
     void run(const ModulateStep& s) override { launch(s.modulate); }
 
     void* allocate(std::size_t bytes) override {
@@ -177,7 +197,8 @@ class CpuDevice final : public Device {
     bool tiles_;  // the firefly removal as one tile pass (a tuning for comparisons)
     CpuScratch scratch_;
     Layout layout_;
-    DeviceBuffer<float> derivatives_, reprojected_, svgfHistory_;  // the split stages' planes
+    DeviceBuffer<float> derivatives_, reprojected_, svgfHistory_,
+        detailHistory_;  // the split stages' planes
     std::array<std::chrono::steady_clock::time_point, kTimestampSlots> stamps_{};
 };
 

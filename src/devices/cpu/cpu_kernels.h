@@ -47,6 +47,11 @@ namespace rtd {
     X(SvgfAtrousNormal128Kernel)          \
     X(SvgfAtrousModulatedKernel)          \
     X(SvgfAtrousNormal128ModulatedKernel) \
+    X(DetailReprojectKernel)              \
+    X(DetailReprojectSearchKernel)        \
+    X(DetailAccumulateKernel)             \
+    X(DetailClampKernel)                  \
+    X(DetailScaleKernel)                  \
     X(ModulateKernel)
 
 // One entry per kernel: runs it over a width x height grid of pixels on all cores, with the

@@ -234,6 +234,7 @@ class CudaDevice final : public Device {
     }
     ~CudaDevice() override {
         cudaStreamSynchronize(stream_);
+        detailHistory_.reset();
         for (cudaEvent_t e : events_) cudaEventDestroy(e);
         cudaFree(counters_);
     }
@@ -249,7 +250,17 @@ class CudaDevice final : public Device {
     void prepare(const Layout& layout, const std::vector<StepKind>& steps) override {
         layout_ = layout;
         interleaved_ = false;
-        for (StepKind k : steps) interleaved_ = interleaved_ || k == StepKind::SvgfTemporalStage;
+        bool detail = false;
+        for (StepKind k : steps) {
+            interleaved_ = interleaved_ || k == StepKind::SvgfTemporalStage;
+            detail = detail || k == StepKind::DetailTemporalStage;
+        }
+        // The detail method's split temporal stage hands its history on through planes (its
+        // guide is planar: its reprojection reads the planar form).
+        detailHistory_.reset();
+        if (detail)
+            detailHistory_ = DeviceBuffer<float>(
+                *this, std::size_t(kDetailHistoryPlanes) * std::size_t(layout.planeSize));
     }
 
     void run(const IngestStep& s) override {
@@ -306,6 +317,23 @@ class CudaDevice final : public Device {
                         : launch(svgfAtrousForm<-1, false, true>(k));
         else
             s.modulated ? launch(k) : launch(svgfAtrousForm<-1, false, false>(k));
+    }
+    void run(const DetailTemporalStageStep& s) override {
+        DetailReprojectKernel reproject = s.reproject;
+        reproject.history = {detailHistory_.data(), layout_.planeSize};
+        launch(reproject);
+        launch(DetailReprojectSearchKernel{
+            reproject.g, reproject.previous, reproject.objects, reproject.objectCount,
+            reproject.derivatives, reproject.test, reproject.previousSlow, reproject.previousFast,
+            reproject.previousMoments, reproject.previousLength, reproject.history,
+            reproject.validity, reproject.hasHistory});
+        DetailAccumulateKernel accumulate = s.accumulate;
+        accumulate.history = reproject.history;
+        launch(accumulate);
+    }
+    void run(const DetailClampStep& s) override {
+        launch(s.clamp);
+        launch(s.scale);
     }
     void run(const ModulateStep& s) override { launch(s.modulate); }
 
@@ -460,6 +488,7 @@ class CudaDevice final : public Device {
     cudaEvent_t (&stageFree_)[kStageSlots];
     int& nextStage_;
     unsigned long long* counters_ = nullptr;  // this frame's flag counts, then the queued ones'
+    DeviceBuffer<float> detailHistory_;       // the detail method's reprojected history
     cudaEvent_t events_[kTimestampSlots] = {};
 };
 

@@ -1,0 +1,241 @@
+// The detail method's own kernels (methods/detail.cpp). Its history is the accumulated,
+// unfiltered illumination, kept twice as in NVIDIA NRD's ReLAX: a long "slow" history (up to
+// maxHistory frames) that holds the detail, and a short "fast" one (up to fastHistory frames)
+// that follows lighting changes and bounds the slow one (DetailClamp). The variance, the
+// short-history estimate and the A-Trous iterations are SVGF's kernels (svgf.h); what they are
+// given differs: the variance of the accumulated mean rather than of one sample, so that the
+// filter's luminance tolerance narrows as the history grows.
+#pragma once
+
+#include "kernels/convert.h"
+#include "kernels/reproject.h"
+#include "kernels/svgf.h"
+#include "kernels/views.h"
+
+namespace rtd {
+
+// The reprojected history handed from DetailReproject to DetailAccumulate in planes: slow rgb,
+// fast rgb, luminance mean, luminance variance, length.
+constexpr int kDetailHistoryPlanes = 9;
+
+struct DetailHistorySample {
+    Float3 slow, fast;
+    float mean = 0.0f, variance = 0.0f, length = 0.0f;
+};
+
+// The previous frame's slow and fast colour, moments and history length at each pixel's
+// back-projected position (0 where the history test fails). As SvgfReproject: Search3x3 = false
+// runs on every pixel with the bilinear taps, Search3x3 = true then redoes the object pixels
+// whose taps all failed with the 3x3 search (sparse).
+template <bool Search3x3>
+struct DetailReproject {
+    static constexpr bool kSparse = Search3x3;  // the CPU launcher keeps it scalar
+    GBufferView g;
+    PreviousGeometry previous;
+    const ObjectReprojection* objects;
+    int objectCount;
+    PlaneSet derivatives;
+    HistoryTest test;
+    Planes3 previousSlow, previousFast;
+    PlaneSet previousMoments;  // 2 planes: luminance mean, variance
+    const float* previousLength;
+    PlaneSet history;  // out: kDetailHistoryPlanes
+    std::uint8_t* validity;
+    int hasHistory;
+
+    RTD_HOST_DEVICE RTD_INLINE std::int32_t runKey(int x, int y) const {
+        return g.objectId[g.layout.index(x, y)];
+    }
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { pixel<false>(x, y, 0); }
+    template <bool KnownId>
+    RTD_HOST_DEVICE RTD_INLINE void pixel(int x, int y, std::int32_t id) const {
+        PixelIndex i = g.layout.index(x, y);
+        if constexpr (Search3x3) {
+            if (validity[i] != kReprojectionOtherObject || g.objectId[i] < 0) return;
+        }
+        std::uint8_t code;
+        DetailHistorySample s = sample<KnownId>(i, id, code);
+        validity[i] = code;
+        store(history, i, s);
+    }
+    RTD_HOST_DEVICE RTD_INLINE static void store(const PlaneSet& h, PixelIndex i,
+                                                 const DetailHistorySample& s) {
+        h.rgb().store(i, s.slow);
+        h.rgb(3).store(i, s.fast);
+        h.at(6, i) = s.mean;
+        h.at(7, i) = s.variance;
+        h.at(8, i) = s.length;
+    }
+    RTD_HOST_DEVICE RTD_INLINE static DetailHistorySample load(const PlaneSet& h, PixelIndex i) {
+        return {h.rgb().load(i), h.rgb(3).load(i), h.at(6, i), h.at(7, i), h.at(8, i)};
+    }
+    template <bool KnownId>
+    RTD_HOST_DEVICE RTD_INLINE DetailHistorySample sample(PixelIndex i, std::int32_t id,
+                                                          std::uint8_t& code) const {
+        auto taps = findHistory<Search3x3, KnownId>(g, i, previous, objects, objectCount,
+                                                    slopesAt(derivatives, i), test, hasHistory, id);
+        code = taps.code;
+        constexpr int kTaps = decltype(taps)::kCount;
+        float sr[kTaps], sg[kTaps], sb[kTaps], fr[kTaps], fg[kTaps], fb[kTaps];
+        float means[kTaps], variances[kTaps], lengths[kTaps];
+        loadTaps(previousSlow, taps, sr, sg, sb);
+        loadTaps(previousFast, taps, fr, fg, fb);
+        loadTaps(previousMoments.data, taps, means);
+        loadTaps(&previousMoments.at(1, 0), taps, variances);
+        loadTaps(previousLength, taps, lengths);
+        DetailHistorySample s;
+        RTD_UNROLL
+        for (int t = 0; t < kTaps; ++t) {
+            float w = taps.weight[t];
+            s.slow += make3(sr[t], sg[t], sb[t]) * w;
+            s.fast += make3(fr[t], fg[t], fb[t]) * w;
+            s.mean += means[t] * w;
+            s.length += lengths[t] * w;
+        }
+        RTD_UNROLL
+        for (int t = 0; t < kTaps; ++t)
+            s.variance += (variances[t] + square(means[t] - s.mean)) * taps.weight[t];
+        return s;
+    }
+};
+using DetailReprojectKernel = DetailReproject<false>;
+using DetailReprojectSearchKernel = DetailReproject<true>;
+
+// Accumulation of the current (demodulated, despeckled) frame into both histories: equal weights
+// up to each one's cap, then exponential. Where the caller gives a confidence c in [0, 1], the
+// history length is scaled by c first (c = 0: the history is dropped), as NRD does.
+struct DetailAccumulateKernel {
+    GBufferView g;
+    Planes3 radiance;
+    PlaneSet history;  // DetailReproject's output
+    const std::uint8_t* validity;
+    InputSpan confidence;  // data null: none
+    Planes3 slow, fast;    // out (histories)
+    PlaneSet moments;      // out (history), 2 planes: luminance mean, variance
+    float* length;         // out (history): frames in the slow history, 1 after a disocclusion
+    float maxHistory, fastHistory, momentsAlpha;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        PixelIndex i = g.layout.index(x, y);
+        DetailHistorySample s = DetailReprojectKernel::load(history, i);
+        float h = validity[i] == kReprojectionValid ? s.length : 0.0f;
+        h *= loadConfidence(confidence, x, y);
+        accumulate(i, s, h);
+    }
+    RTD_HOST_DEVICE RTD_INLINE void accumulate(PixelIndex i, const DetailHistorySample& s,
+                                               float h) const {
+        Float3 current = radiance.load(i);
+        bool object = g.objectId[i] >= 0;
+        float hs = minf(h + 1.0f, maxHistory), hf = minf(h + 1.0f, fastHistory);
+        float as = 1.0f / hs, af = 1.0f / hf, am = maxf(momentsAlpha, as);
+        float d = luminance(current) - s.mean;
+        slow.store(i, s.slow * (1.0f - as) + current * as);
+        fast.store(i, s.fast * (1.0f - af) + current * af);
+        moments.at(0, i) = object ? s.mean + am * d : 0.0f;
+        moments.at(1, i) = object ? (1.0f - am) * (s.variance + am * d * d) : 0.0f;
+        length[i] = object ? hs : 0.0f;
+    }
+};
+
+// History clamping, anti-lag and the A-Trous input, over each pixel's 5x5 neighbourhood (same
+// filter key):
+// - anti-lag (antiLag, where the caller gives no confidence): where the current frame's mean
+//   differs from the fast history's by more than 3 standard errors of the current mean, the
+//   lighting changed. Both histories are scaled by the ratio of the means (the level follows the
+//   new lighting, the detail is kept) in proportion to the change, and the history length cut
+//   by (1 - change)^4 (as SVGF's anti-lag), so that the next frames take the new lighting up;
+// - the clamp: the slow history into the fast one's mean +- clampSigma standard deviations, per
+//   channel; where that moved it, the history length is cut towards the fast history's in
+//   proportion to the move over the box's half width.
+// Writes the slow history and the length in place (no pixel reads another's here), the ratio
+// for the fast history (DetailScaleKernel applies it after: its neighbours read it here) and
+// the filter input: rgb + the variance of the accumulated mean (the luminance moments' variance
+// over the history length).
+struct DetailClampKernel {
+    GBufferView g;
+    Planes3 radiance;  // this frame's, as accumulated
+    Planes3 fast;      // read here; DetailScaleKernel applies the anti-lag to it
+    Planes3 slow;      // in and out
+    PlaneSet moments;
+    float* length;      // in and out
+    PlaneSet filterIn;  // out: rgb + variance
+    float* lagScale;    // out: the anti-lag's colour ratio (1: none), for the fast history
+    float clampSigma;   // 0: no clamp
+    float fastHistory;
+    int antiLag;  // 1: on
+    static constexpr int kRadius = 2;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const Layout& L = g.layout;
+        PixelIndex i = L.index(x, y);
+        const std::int32_t key = g.filterKey[i];
+        Float3 c = slow.load(i);
+        float h = length[i];
+        float ratio = 1.0f;
+        if (key >= 0) {
+            Float3 sum, sumSq;
+            float n = 0.0f, currentSum = 0.0f, currentSumSq = 0.0f;
+            for (int dy = -kRadius; dy <= kRadius; ++dy)
+                for (int dx = -kRadius; dx <= kRadius; ++dx) {
+                    PixelIndex j = i + L.offset(dx, dy);
+                    float w = g.filterKey[j] == key ? 1.0f : 0.0f;
+                    Float3 f = fast.load(j);
+                    float l = luminance(radiance.load(j));
+                    sum += f * w;
+                    sumSq += f * f * w;
+                    currentSum += l * w;
+                    currentSumSq += l * l * w;
+                    n += w;
+                }
+            const float inv = 1.0f / n;
+            Float3 mean = sum * inv;
+            if (antiLag) {
+                float currentMean = currentSum * inv;
+                float currentSigma =
+                    std::sqrt(maxf(currentSumSq * inv - square(currentMean), 0.0f));
+                float fastMean = luminance(mean);
+                float gap =
+                    maxf(absf(currentMean - fastMean) - 3.0f * currentSigma * std::sqrt(inv), 0.0f);
+                float change = minf(gap / maxf(maxf(currentMean, fastMean), 1e-4f), 1.0f);
+                // The histories follow the current level: ratio^min(1, 3 change).
+                float r = maxf(currentMean, 1e-6f) / maxf(fastMean, 1e-6f);
+                ratio = change > 0.0f ? std::pow(r, minf(1.0f, 3.0f * change)) : 1.0f;
+                h *= square(square(1.0f - change));
+                c = c * ratio;
+                mean = mean * ratio;
+            }
+            if (clampSigma > 0.0f) {
+                Float3 variance = sumSq * inv - sum * inv * (sum * inv);
+                Float3 sigma =
+                    make3(std::sqrt(maxf(variance.x, 0.0f)), std::sqrt(maxf(variance.y, 0.0f)),
+                          std::sqrt(maxf(variance.z, 0.0f))) *
+                    ratio;
+                Float3 half = sigma * clampSigma;
+                Float3 clamped = clamp3(c, mean - half, mean + half);
+                float moved = absf(luminance(clamped) - luminance(c));
+                float t = minf(moved / (luminance(half) + 1e-6f), 1.0f);
+                h = minf(h, h + (minf(h, fastHistory) - h) * t);
+                c = clamped;
+            }
+            slow.store(i, c);
+            length[i] = maxf(h, 1.0f);
+        }
+        lagScale[i] = ratio;
+        filterIn.rgb().store(i, c);
+        filterIn.at(3, i) = key >= 0 ? moments.at(1, i) / maxf(h, 1.0f) : 0.0f;
+    }
+};
+
+// The anti-lag's ratio applied to the fast history (after DetailClamp, which reads it around
+// each pixel).
+struct DetailScaleKernel {
+    Layout layout;
+    Planes3 fast;
+    const float* lagScale;
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        PixelIndex i = layout.index(x, y);
+        fast.store(i, fast.load(i) * lagScale[i]);
+    }
+};
+
+}  // namespace rtd

@@ -1,0 +1,140 @@
+// detail: SVGF's variance-guided filter over a history that keeps the detail. The colour history
+// is the accumulated, unfiltered illumination (SVGF feeds a blurred iteration back, which bakes
+// the blur into every later frame), kept twice as in NVIDIA NRD's ReLAX: a slow history of up to
+// max-history frames and a fast one of up to fast-history frames, to which the slow one is
+// clamped (lighting changes). The A-Trous iterations' luminance tolerance follows the variance
+// of the accumulated mean, so the filter narrows as a pixel's history grows; pixels with a short
+// history (disocclusions, lighting changes) get SVGF's 7x7 spatial estimate first.
+//
+//   ingest -> [outlier] -> geometry -> detail-temporal -> detail-clamp -> detail-variance
+//          -> detail-atrous0 .. detail-atrous{iterations-1} (the last one modulated)
+//   detail-temporal: reprojection of both histories (3x3 search where the bilinear taps fail),
+//   accumulation (scaled by the caller's confidence where given)
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "methods/method.h"
+
+namespace rtd {
+
+FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
+    const DetailSettings& d = settings.detail;
+    FrameImages f = declareIngest(p, settings);
+    ResourceId in = declareDespeckle(p, settings, f);
+
+    ResourceId derivatives = p.declare(floatImage("derivatives", 3));  // dz/dx, dz/dy, fwidth(n)
+    ResourceId slow = p.declare(floatImage("slowHistory", 3, Lifetime::History));
+    ResourceId fast = p.declare(floatImage("fastHistory", 3, Lifetime::History));
+    ResourceId moments = p.declare(floatImage("moments", 2, Lifetime::History));
+    ResourceId length = p.declare({.name = "historyLength",
+                                   .lifetime = Lifetime::History,
+                                   .hasDebugView = true,
+                                   .debugView = DebugView::HistoryLength,
+                                   .debugDivisor = float(d.maxHistory)});
+    // rgb + variance, the A-Trous input.
+    ResourceId variance = p.declare({.name = "illumination+variance",
+                                     .planes = 4,
+                                     .hasDebugView = true,
+                                     .debugView = DebugView::Variance,
+                                     .debugPlane = 3,
+                                     .debugShow = DebugShow::StandardDeviation});
+    ResourceId filterA = p.declare(floatImage("filterA", 4));
+    ResourceId filterB = p.declare(floatImage("filterB", 4));
+    ResourceId validity = declareValidity(p);
+    const SvgfTerms terms{d.sigmaDepth, d.sigmaNormal, d.sigmaLuminance};
+
+    p.addPass("geometry", StepKind::Geometry, gbufferReads(f), {derivatives}, 2,
+              [f, derivatives](const PassContext& c) {
+                  c.device().run(GeometryStep{{gbuffer(c, f), c.planeSet(derivatives)}});
+              });
+
+    const HistoryTest test = historyTest(settings.history);
+    p.addPass("detail-temporal", StepKind::DetailTemporalStage,
+              with(reprojectionReads(p, f), {derivatives, previous(slow), previous(fast),
+                                             previous(moments), previous(length), in}),
+              {slow, fast, moments, length, validity}, 2, [=](const PassContext& c) {
+                  GBufferView g = gbuffer(c, f);
+                  const FrameBinding& frame = c.frame();
+                  DetailReprojectKernel reproject{g,
+                                                  previousGeometry(c, f),
+                                                  c.objects(),
+                                                  frame.objectCount,
+                                                  c.planeSet(derivatives),
+                                                  test,
+                                                  c.planes(previous(slow)),
+                                                  c.planes(previous(fast)),
+                                                  c.planeSet(previous(moments)),
+                                                  c.floats(previous(length)),
+                                                  {},
+                                                  c.bytes(validity),
+                                                  frame.hasHistory};
+                  DetailAccumulateKernel accumulate{g,
+                                                    c.planes(in),
+                                                    {},
+                                                    c.bytes(validity),
+                                                    frame.confidence,
+                                                    c.planes(slow),
+                                                    c.planes(fast),
+                                                    c.planeSet(moments),
+                                                    c.floats(length),
+                                                    float(d.maxHistory),
+                                                    float(d.fastHistory),
+                                                    d.momentsAlpha};
+                  c.device().run(DetailTemporalStageStep{reproject, accumulate});
+              });
+
+    // The anti-lag only where the caller gives no confidence (the frame's, known per frame).
+    ResourceId lagScale = p.declare(floatImage("lagScale", 1));
+    p.addPass("detail-clamp", StepKind::DetailClamp,
+              with(gbufferReads(f), {p.frame(), in, fast, slow, moments, length}),
+              {fast, slow, length, variance, lagScale}, DetailClampKernel::kRadius,
+              [=](const PassContext& c) {
+                  const bool antiLag = d.antiLag && !c.frame().confidence.data;
+                  c.device().run(DetailClampStep{
+                      {gbuffer(c, f), c.planes(in), c.planes(fast), c.planes(slow),
+                       c.planeSet(moments), c.floats(length), c.planeSet(variance),
+                       c.floats(lagScale), d.clampSigma, float(d.fastHistory), antiLag ? 1 : 0},
+                      {c.layout(), c.planes(fast), c.floats(lagScale)}});
+              });
+
+    // Short histories only (block-sparse): SVGF's 7x7 estimate of the variance and colour, with
+    // its wide luminance tolerance (there is no variance yet).
+    SvgfTerms wide = terms;
+    wide.sigmaLuminance = 10.0f;
+    constexpr float kShortHistory = 4.0f;  // frames: below, estimate spatially
+    p.addPass("detail-variance", StepKind::SvgfVariance,
+              with(gbufferReads(f), {slow, moments, length, derivatives, variance}), {variance},
+              kSvgfWindowRadius, [=](const PassContext& c) {
+                  c.device().run(SvgfVarianceStep{
+                      {gbuffer(c, f), c.planeSet(derivatives), c.planes(slow), c.planeSet(moments),
+                       c.floats(length), c.planeSet(variance), wide, kShortHistory}});
+              });
+
+    // The iterations ping-pong between filterA and filterB; the last writes the output.
+    ResourceId src = variance;
+    for (int it = 0; it < d.iterations; ++it) {
+        const bool modulated = it == d.iterations - 1;
+        const ResourceId dst = src.index == filterA.index ? filterB : filterA;
+        const int stride = 1 << it;
+        std::vector<ResourceId> reads = with(gbufferReads(f), {src, derivatives});
+        if (modulated) reads.push_back(f.albedo);
+        p.addPass(fmt::format("detail-atrous{}", it), StepKind::SvgfAtrousIteration, reads,
+                  {modulated ? p.output() : dst}, 2 * stride, [=](const PassContext& c) {
+                      SvgfAtrousModulatedKernel iteration{gbuffer(c, f),   c.planeSet(derivatives),
+                                                          c.planeSet(src), {},
+                                                          stride,          terms};
+                      if (modulated) {
+                          iteration.albedo = c.planes(f.albedo);
+                          iteration.rgbOut = c.output();
+                      } else {
+                          iteration.out = c.planeSet(dst);
+                      }
+                      c.device().run(SvgfAtrousIterationStep{iteration, modulated});
+                  });
+        src = dst;
+    }
+    return f;
+}
+
+}  // namespace rtd
