@@ -34,7 +34,8 @@ std::string cudaUnavailableReason() {
 // gpuTilePasses: the CUDA denoiser's (the CPU's runs its default).
 void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what,
                          std::initializer_list<Method> methods = {Method::Jbf, Method::Atrous,
-                                                                  Method::Temporal, Method::Svgf},
+                                                                  Method::Temporal, Method::Svgf,
+                                                                  Method::Detail},
                          TilePasses gpuTilePasses = TilePasses::Auto) {
     for (Method method : methods) {
         DenoiserSettings s;
@@ -76,7 +77,8 @@ TEST(Gpu, CpuAndCudaAgreeOnFramesLargerThanTheStagingChunks) {
     std::string reason = cudaUnavailableReason();
     if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
     std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 1400, 1000, 2);
-    expectBackEndsAgree(frames, "moving-objects 1400x1000", {Method::Atrous, Method::Svgf});
+    expectBackEndsAgree(frames, "moving-objects 1400x1000",
+                        {Method::Atrous, Method::Svgf, Method::Detail});
 }
 
 TEST(Gpu, CpuAndCudaAgreeOnTheCourseScene) {

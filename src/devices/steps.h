@@ -115,8 +115,11 @@ struct DetailTemporalStageStep {
     DetailAccumulateKernel accumulate;
 };
 
-// The clamp and anti-lag, then the anti-lag's ratio applied to the fast history.
+// The window sums of the fast history and of the current luminance, the clamp and anti-lag,
+// then the anti-lag's ratio applied to the fast history.
 struct DetailClampStep {
+    ColorRowSumsKernel fastRows;
+    LuminanceRowSumsKernel currentRows;
     DetailClampKernel clamp;
     DetailScaleKernel scale;
 };
@@ -141,6 +144,16 @@ template <int MaxRadius>
 AccumulateModulated<MaxRadius> accumulateForm(const AccumulateModulatedKernel& k) {
     return {k.g,     k.rowSums, k.current, k.reprojected, k.validity, k.out,
             k.alpha, k.clampK,  k.radius,  k.albedo,      k.rgbOut};
+}
+// The detail accumulation's form for the frame: with the confidence where the frame has one.
+template <class Launch>
+void launchDetailAccumulate(const DetailAccumulateKernel& a, Launch&& launch) {
+    if (a.confidence.data)
+        launch(DetailAccumulateConfidenceKernel{a.g, a.radiance, a.history, a.validity,
+                                                a.confidence, a.slow, a.fast, a.moments, a.length,
+                                                a.maxHistory, a.fastHistory, a.momentsAlpha});
+    else
+        launch(a);
 }
 template <bool Search3x3>
 SvgfReproject<Search3x3> svgfReprojectForm(const SvgfReprojectKernel& k) {

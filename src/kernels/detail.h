@@ -11,6 +11,7 @@
 #include "kernels/reproject.h"
 #include "kernels/svgf.h"
 #include "kernels/views.h"
+#include "kernels/window_sums.h"
 
 namespace rtd {
 
@@ -104,7 +105,10 @@ using DetailReprojectSearchKernel = DetailReproject<true>;
 // Accumulation of the current (demodulated, despeckled) frame into both histories: equal weights
 // up to each one's cap, then exponential. Where the caller gives a confidence c in [0, 1], the
 // history length is scaled by c first (c = 0: the history is dropped), as NRD does.
-struct DetailAccumulateKernel {
+// WithConfidence: the form that reads it (its per-pixel type switch keeps the CPU's loop
+// scalar, so the form without it, for frames without one, vectorises).
+template <bool WithConfidence>
+struct DetailAccumulate {
     GBufferView g;
     Planes3 radiance;
     PlaneSet history;  // DetailReproject's output
@@ -119,7 +123,7 @@ struct DetailAccumulateKernel {
         PixelIndex i = g.layout.index(x, y);
         DetailHistorySample s = DetailReprojectKernel::load(history, i);
         float h = validity[i] == kReprojectionValid ? s.length : 0.0f;
-        h *= loadConfidence(confidence, x, y);
+        if constexpr (WithConfidence) h *= loadConfidence(confidence, x, y);
         accumulate(i, s, h);
     }
     RTD_HOST_DEVICE RTD_INLINE void accumulate(PixelIndex i, const DetailHistorySample& s,
@@ -136,26 +140,28 @@ struct DetailAccumulateKernel {
         length[i] = object ? hs : 0.0f;
     }
 };
+using DetailAccumulateKernel = DetailAccumulate<false>;
+using DetailAccumulateConfidenceKernel = DetailAccumulate<true>;
 
-// History clamping, anti-lag and the A-Trous input, over each pixel's 5x5 neighbourhood (same
-// filter key):
+// History clamping, anti-lag and the A-Trous input, over each pixel's 5x5 window of object
+// pixels (the window sums of the fast history and of the current frame's luminance, window_sums.h):
 // - anti-lag (antiLag, where the caller gives no confidence): where the current frame's mean
 //   differs from the fast history's by more than 3 standard errors of the current mean, the
-//   lighting changed. Both histories are scaled by the ratio of the means (the level follows the
-//   new lighting, the detail is kept) in proportion to the change, and the history length cut
-//   by (1 - change)^4 (as SVGF's anti-lag), so that the next frames take the new lighting up;
+//   lighting changed. Both histories are scaled towards the current level, by the ratio of the
+//   means to the power min(1, 3 change) (the level follows, the detail is kept), and the
+//   history length is cut by (1 - change)^4 (as SVGF's anti-lag), so that the next frames take
+//   the new lighting up;
 // - the clamp: the slow history into the fast one's mean +- clampSigma standard deviations, per
 //   channel; where that moved it, the history length is cut towards the fast history's in
 //   proportion to the move over the box's half width.
-// Writes the slow history and the length in place (no pixel reads another's here), the ratio
-// for the fast history (DetailScaleKernel applies it after: its neighbours read it here) and
-// the filter input: rgb + the variance of the accumulated mean (the luminance moments' variance
-// over the history length).
+// Writes the slow history and the length in place, the ratio for the fast history
+// (DetailScaleKernel) and the filter input: rgb + the variance of the accumulated mean (the
+// luminance moments' variance over the history length).
 struct DetailClampKernel {
     GBufferView g;
-    Planes3 radiance;  // this frame's, as accumulated
-    Planes3 fast;      // read here; DetailScaleKernel applies the anti-lag to it
-    Planes3 slow;      // in and out
+    PlaneSet fastSums;     // ColorRowSumsKernel over the fast history, radius kRadius
+    PlaneSet currentSums;  // LuminanceRowSumsKernel over this frame's radiance, radius kRadius
+    Planes3 slow;          // in and out
     PlaneSet moments;
     float* length;      // in and out
     PlaneSet filterIn;  // out: rgb + variance
@@ -165,64 +171,52 @@ struct DetailClampKernel {
     int antiLag;  // 1: on
     static constexpr int kRadius = 2;
 
+    // Branch-free (every pixel computes every term; selects pick the outputs) so the CPU
+    // vectorises it across pixels.
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
-        const std::int32_t key = g.filterKey[i];
-        Float3 c = slow.load(i);
-        float h = length[i];
-        float ratio = 1.0f;
-        if (key >= 0) {
-            Float3 sum, sumSq;
-            float n = 0.0f, currentSum = 0.0f, currentSumSq = 0.0f;
-            for (int dy = -kRadius; dy <= kRadius; ++dy)
-                for (int dx = -kRadius; dx <= kRadius; ++dx) {
-                    PixelIndex j = i + L.offset(dx, dy);
-                    float w = g.filterKey[j] == key ? 1.0f : 0.0f;
-                    Float3 f = fast.load(j);
-                    float l = luminance(radiance.load(j));
-                    sum += f * w;
-                    sumSq += f * f * w;
-                    currentSum += l * w;
-                    currentSumSq += l * l * w;
-                    n += w;
-                }
-            const float inv = 1.0f / n;
-            Float3 mean = sum * inv;
-            if (antiLag) {
-                float currentMean = currentSum * inv;
-                float currentSigma =
-                    std::sqrt(maxf(currentSumSq * inv - square(currentMean), 0.0f));
-                float fastMean = luminance(mean);
-                float gap =
-                    maxf(absf(currentMean - fastMean) - 3.0f * currentSigma * std::sqrt(inv), 0.0f);
-                float change = minf(gap / maxf(maxf(currentMean, fastMean), 1e-4f), 1.0f);
-                // The histories follow the current level: ratio^min(1, 3 change).
-                float r = maxf(currentMean, 1e-6f) / maxf(fastMean, 1e-6f);
-                ratio = change > 0.0f ? std::pow(r, minf(1.0f, 3.0f * change)) : 1.0f;
-                h *= square(square(1.0f - change));
-                c = c * ratio;
-                mean = mean * ratio;
-            }
-            if (clampSigma > 0.0f) {
-                Float3 variance = sumSq * inv - sum * inv * (sum * inv);
-                Float3 sigma =
-                    make3(std::sqrt(maxf(variance.x, 0.0f)), std::sqrt(maxf(variance.y, 0.0f)),
-                          std::sqrt(maxf(variance.z, 0.0f))) *
-                    ratio;
-                Float3 half = sigma * clampSigma;
-                Float3 clamped = clamp3(c, mean - half, mean + half);
-                float moved = absf(luminance(clamped) - luminance(c));
-                float t = minf(moved / (luminance(half) + 1e-6f), 1.0f);
-                h = minf(h, h + (minf(h, fastHistory) - h) * t);
-                c = clamped;
-            }
-            slow.store(i, c);
-            length[i] = maxf(h, 1.0f);
-        }
-        lagScale[i] = ratio;
+        const bool object = g.objectId[i] >= 0;
+        const Float3 c0 = slow.load(i);
+        const float h0 = length[i];
+        ColorWindowStats fastWindow =
+            colorWindowStats<kNarrowWindow>(fastSums, i, L.pitch, kRadius);
+        const float n = maxf(columnSum<kNarrowWindow>(currentSums, 0, i, L.pitch, kRadius), 1.0f);
+        const float currentMean = columnSum<kNarrowWindow>(currentSums, 1, i, L.pitch, kRadius) / n;
+        const float currentSquares =
+            columnSum<kNarrowWindow>(currentSums, 2, i, L.pitch, kRadius) / n;
+        Float3 mean = fastWindow.mean;
+        float h = h0;
+        // Anti-lag: the change beyond 3 standard errors of the current mean, relative.
+        float currentSigma = std::sqrt(maxf(currentSquares - square(currentMean), 0.0f));
+        float fastMean = luminance(mean);
+        float gap = maxf(absf(currentMean - fastMean) - 3.0f * currentSigma / std::sqrt(n), 0.0f);
+        float change = antiLag ? minf(gap / maxf(maxf(currentMean, fastMean), 1e-4f), 1.0f) : 0.0f;
+        // (current / fast)^min(1, 3 change) as 2^(e log2 r): exp2Negative of -|e| and, for a
+        // positive e, its reciprocal.
+        float e = minf(1.0f, 3.0f * change) *
+                  log2Positive(maxf(currentMean, 1e-6f) / maxf(fastMean, 1e-6f));
+        float p = exp2Negative(-absf(e));
+        float ratio = change > 0.0f ? (e <= 0.0f ? p : 1.0f / p) : 1.0f;
+        h *= square(square(1.0f - change));
+        Float3 c = c0 * ratio;
+        mean = mean * ratio;
+        // The clamp to the fast history's box.
+        Float3 half = fastWindow.sigma * (ratio * clampSigma);
+        Float3 clamped = clamp3(c, mean - half, mean + half);
+        float moved = absf(luminance(clamped) - luminance(c));
+        float t = clampSigma > 0.0f ? minf(moved / (luminance(half) + 1e-6f), 1.0f) : 0.0f;
+        h = minf(h, h + (minf(h, fastHistory) - h) * t);
+        // Per component (a selected vector would stop the CPU vectorising the kernel).
+        const bool clamp = clampSigma > 0.0f;
+        c = make3(clamp ? clamped.x : c.x, clamp ? clamped.y : c.y, clamp ? clamped.z : c.z);
+        c = make3(object ? c.x : c0.x, object ? c.y : c0.y, object ? c.z : c0.z);
+        h = object ? maxf(h, 1.0f) : h0;
+        slow.store(i, c);
+        length[i] = h;
+        lagScale[i] = object ? ratio : 1.0f;
         filterIn.rgb().store(i, c);
-        filterIn.at(3, i) = key >= 0 ? moments.at(1, i) / maxf(h, 1.0f) : 0.0f;
+        filterIn.at(3, i) = object ? moments.at(1, i) / h : 0.0f;
     }
 };
 

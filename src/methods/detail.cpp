@@ -85,14 +85,20 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
               });
 
     // The anti-lag only where the caller gives no confidence (the frame's, known per frame).
+    // The fast history's window sums in windowSums (free after the firefly removal).
     ResourceId lagScale = p.declare(floatImage("lagScale", 1));
+    ResourceId currentSums = p.declare(floatImage("currentSums", 3));
+    constexpr int kWindow = DetailClampKernel::kRadius;
     p.addPass("detail-clamp", StepKind::DetailClamp,
               with(gbufferReads(f), {p.frame(), in, fast, slow, moments, length}),
-              {fast, slow, length, variance, lagScale}, DetailClampKernel::kRadius,
+              {fast, slow, length, variance, lagScale, f.windowSums, currentSums}, kNarrowWindow,
               [=](const PassContext& c) {
+                  const GBufferView g = gbuffer(c, f);
                   const bool antiLag = d.antiLag && !c.frame().confidence.data;
                   c.device().run(DetailClampStep{
-                      {gbuffer(c, f), c.planes(in), c.planes(fast), c.planes(slow),
+                      {g, c.planes(fast), c.planeSet(f.windowSums), kWindow},
+                      {g, c.planes(in), c.planeSet(currentSums), kWindow},
+                      {g, c.planeSet(f.windowSums), c.planeSet(currentSums), c.planes(slow),
                        c.planeSet(moments), c.floats(length), c.planeSet(variance),
                        c.floats(lagScale), d.clampSigma, float(d.fastHistory), antiLag ? 1 : 0},
                       {c.layout(), c.planes(fast), c.floats(lagScale)}});

@@ -50,6 +50,7 @@ namespace rtd {
     X(DetailReprojectKernel)              \
     X(DetailReprojectSearchKernel)        \
     X(DetailAccumulateKernel)             \
+    X(DetailAccumulateConfidenceKernel)   \
     X(DetailClampKernel)                  \
     X(DetailScaleKernel)                  \
     X(ModulateKernel)

@@ -329,9 +329,11 @@ class CudaDevice final : public Device {
             reproject.validity, reproject.hasHistory});
         DetailAccumulateKernel accumulate = s.accumulate;
         accumulate.history = reproject.history;
-        launch(accumulate);
+        launchDetailAccumulate(accumulate, [this](const auto& k) { launch(k); });
     }
     void run(const DetailClampStep& s) override {
+        launch(s.fastRows);
+        launch(s.currentRows);
         launch(s.clamp);
         launch(s.scale);
     }

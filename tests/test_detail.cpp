@@ -1,0 +1,149 @@
+// The detail method (methods/detail.cpp): known answers on synthetic frames, and what it keeps
+// that SVGF blurs (a thin shadow line) or lags on (a light switched off).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_support.h"
+
+namespace rtd {
+namespace {
+
+using test::makeFrame;
+using test::SceneDescription;
+
+// A static 48x48 wall whose illumination is `level` with a one-pixel shadow line (0.05 of it) at
+// column 24, noise of +-amplitude added (the seed per frame).
+Frame wallWithShadowLine(float level, float amplitude, unsigned seed) {
+    SceneDescription d;
+    d.width = 48;
+    d.height = 48;
+    d.colour = [level](int x, int) {
+        float v = x == 24 ? 0.05f * level : level;
+        return std::array<float, 3>{v, v, v};
+    };
+    Frame f = makeFrame(d);
+    if (amplitude > 0.0f) test::addNoise(f, amplitude, seed);
+    return f;
+}
+
+// Mean of channel 0 over column x, rows 8..39 (away from the borders).
+double columnMean(const Image& image, int x) {
+    double sum = 0.0;
+    for (int y = 8; y < 40; ++y) sum += image.at(x, y, 0);
+    return sum / 32.0;
+}
+
+TEST(Detail, ConstantIlluminationStaysConstantAndTextureIsKept) {
+    // Radiance = albedo (a checker) * constant illumination: demodulation gives a constant, every
+    // pass keeps it, remodulation restores the checker.
+    SceneDescription d;
+    d.width = 40;
+    d.height = 32;
+    auto checker = [](int x, int y) { return ((x / 2 + y / 2) % 2) ? 0.9f : 0.2f; };
+    d.colour = [&](int x, int y) {
+        float a = checker(x, y);
+        return std::array<float, 3>{0.8f * a, 0.4f * a, 0.2f * a};
+    };
+    Frame frame = makeFrame(d);
+    Image albedo(d.width, d.height, 3);
+    for (int y = 0; y < d.height; ++y)
+        for (int x = 0; x < d.width; ++x)
+            for (int c = 0; c < 3; ++c) albedo.at(x, y, c) = checker(x, y) / float(1 << c);
+    frame.albedo = albedo;
+    Denoiser denoiser(test::cpuSettings(Method::Detail));
+    for (int i = 0; i < 4; ++i) {
+        Image out = denoiser.processFrame(frame);
+        for (std::size_t k = 0; k < out.pixels.size(); ++k)
+            ASSERT_NEAR(out.pixels[k], frame.beauty.pixels[k], 1e-5f) << "frame " << i;
+    }
+}
+
+TEST(Detail, ReducesNoiseOnAStaticNoisyWall) {
+    Denoiser denoiser(test::cpuSettings(Method::Detail));
+    double inputError = 0, outputError = 0;
+    for (int i = 0; i < 8; ++i) {
+        SceneDescription d;
+        d.width = d.height = 48;
+        d.colour = [](int, int) { return std::array<float, 3>{0.5f, 0.5f, 0.5f}; };
+        Frame frame = makeFrame(d);
+        test::addNoise(frame, 0.4f, unsigned(100 + i));
+        Image out = denoiser.processFrame(frame);
+        if (i == 7)
+            for (std::size_t k = 0; k < out.pixels.size(); ++k) {
+                inputError += std::pow(frame.beauty.pixels[k] - 0.5, 2);
+                outputError += std::pow(out.pixels[k] - 0.5, 2);
+            }
+    }
+    EXPECT_LT(outputError, inputError / 50.0);
+}
+
+// A one-pixel shadow line on a noisy wall: after 16 frames SVGF's blurred feedback has filled
+// it in, the detail method's unfiltered history keeps it dark.
+TEST(Detail, KeepsAThinShadowLineThatSvgfFillsIn) {
+    Denoiser detail(test::cpuSettings(Method::Detail)), svgf(test::cpuSettings(Method::Svgf));
+    Image a, b;
+    for (int i = 0; i < 16; ++i) {
+        Frame frame = wallWithShadowLine(1.0f, 0.3f, unsigned(7 + i));
+        a = detail.processFrame(frame);
+        b = svgf.processFrame(frame);
+    }
+    const double truth = 0.05;
+    const double detailError = std::fabs(columnMean(a, 24) - truth);
+    const double svgfError = std::fabs(columnMean(b, 24) - truth);
+    RecordProperty("detail_line", std::to_string(columnMean(a, 24)));
+    RecordProperty("svgf_line", std::to_string(columnMean(b, 24)));
+    EXPECT_LT(detailError, 0.5 * svgfError)
+        << "detail " << columnMean(a, 24) << ", svgf " << columnMean(b, 24);
+    EXPECT_LT(detailError, 0.15);
+    EXPECT_NEAR(columnMean(a, 12), 1.0, 0.05);  // the lit wall keeps its level
+}
+
+// The light goes from 1 to 0.2 after 12 frames of history: without a confidence input the
+// anti-lag follows within the frame of the switch.
+TEST(Detail, FollowsALightSwitchedOffInTheSameFrame) {
+    Denoiser denoiser(test::cpuSettings(Method::Detail));
+    for (int i = 0; i < 12; ++i) denoiser.processFrame(wallWithShadowLine(1.0f, 0.3f, 30u + i));
+    Image out = denoiser.processFrame(wallWithShadowLine(0.2f, 0.06f, 99u));
+    EXPECT_NEAR(columnMean(out, 12), 0.2, 0.04);
+}
+
+// Confidence 0 everywhere drops the history: the frame's result is a fresh denoiser's.
+TEST(Detail, ZeroConfidenceGivesAFreshDenoisersResult) {
+    DenoiserSettings s = test::cpuSettings(Method::Detail);
+    Denoiser kept(s);
+    for (int i = 0; i < 5; ++i) kept.processFrame(wallWithShadowLine(1.0f, 0.3f, 50u + i));
+    Frame frame = wallWithShadowLine(0.4f, 0.1f, 77u);
+    Image confidence(frame.beauty.width, frame.beauty.height, 1);  // zeros
+    frame.confidence = confidence;
+    Image dropped = kept.processFrame(frame);
+    Denoiser fresh(s);
+    Image first = fresh.processFrame(frame);
+    ASSERT_EQ(dropped.pixels.size(), first.pixels.size());
+    for (std::size_t k = 0; k < first.pixels.size(); ++k)
+        ASSERT_NEAR(dropped.pixels[k], first.pixels[k], 1e-5f * (1.0f + first.pixels[k])) << k;
+    // Confidence 1 keeps it: another result.
+    Denoiser kept2(s);
+    for (int i = 0; i < 5; ++i) kept2.processFrame(wallWithShadowLine(1.0f, 0.3f, 50u + i));
+    frame.confidence->pixels.assign(frame.confidence->pixels.size(), 1.0f);
+    Image continued = kept2.processFrame(frame);
+    double differs = 0.0;
+    for (std::size_t k = 0; k < first.pixels.size(); ++k)
+        differs = std::max(differs, double(std::fabs(continued.pixels[k] - first.pixels[k])));
+    EXPECT_GT(differs, 1e-3);
+}
+
+TEST(Detail, PassesAreDeclaredInOrder) {
+    Denoiser denoiser(test::cpuSettings(Method::Detail));
+    denoiser.processFrame(wallWithShadowLine(1.0f, 0.0f, 1u));
+    std::vector<std::string> names;
+    for (const PassInfo& p : denoiser.passes()) names.push_back(p.name);
+    const std::vector<std::string> expected = {
+        "ingest",         "outlier",         "geometry",       "detail-temporal",
+        "detail-clamp",   "detail-variance", "detail-atrous0", "detail-atrous1",
+        "detail-atrous2", "detail-atrous3",  "detail-atrous4"};
+    EXPECT_EQ(names, expected);
+}
+
+}  // namespace
+}  // namespace rtd
