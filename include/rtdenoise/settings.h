@@ -99,8 +99,8 @@ struct DetailSettings {
                                   // the accumulated mean
     int iterations = 5;           // [1, 10] A-Trous iterations, stride 2^i
     int maxHistory = 32;          // [1, 1000] slow history cap (frames)
-    int fastHistory = 4;          // [1, max-history] fast history cap (frames): the clamp's guide
-    float clampSigma = 2.0f;      // [>=0] slow history clamped to the fast one's 5x5 mean +- this
+    int fastHistory = 6;          // [1, max-history] fast history cap (frames): the clamp's guide
+    float clampSigma = 1.5f;      // [>=0] slow history clamped to the fast one's 5x5 mean +- this
                                   // many standard deviations (0: no clamp)
     float momentsAlpha = 0.2f;    // [0, 1] luminance moments: weight of the current frame
     bool antiLag = true;          // without a confidence input: where the current frame's 5x5

@@ -220,7 +220,7 @@ def test_out_arrays_are_written_in_place(frames, reference_results):
 # ---- history ----
 
 
-@pytest.mark.parametrize("method", ["temporal", "svgf"])
+@pytest.mark.parametrize("method", ["temporal", "svgf", "detail"])
 def test_history_is_kept_across_calls_and_reset_forgets_it(frames, method):
     den = rtdenoise.Denoiser(method, device="cpu")
     frame = frames[1]
@@ -229,6 +229,21 @@ def test_history_is_kept_across_calls_and_reset_forgets_it(frames, method):
     assert not np.array_equal(first, second)
     den.reset()
     np.testing.assert_array_equal(den.denoise_frame(frame), first)
+
+
+def test_zero_confidence_drops_the_detail_methods_history(frames):
+    den = rtdenoise.Denoiser("detail", device="cpu")
+    den.denoise_frame(frames[0])
+    inputs = frames[1].inputs()
+    inputs.pop("confidence")
+    height, width = inputs["color"].shape[:2]
+    dropped = den.denoise(**inputs, confidence=np.zeros((height, width), np.float32)).copy()
+    fresh = rtdenoise.Denoiser("detail", device="cpu").denoise(**inputs)
+    np.testing.assert_allclose(dropped, fresh, rtol=1e-5, atol=1e-6)
+    kept = rtdenoise.Denoiser("detail", device="cpu")
+    kept.denoise_frame(frames[0])
+    continued = kept.denoise(**inputs, confidence=np.ones((height, width), np.float32))
+    assert np.abs(continued - fresh).max() > 1e-3
 
 
 def test_single_frame_methods_need_no_matrices(plane):
