@@ -438,8 +438,8 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
                  "[0,1] detail luminance moments: current-frame weight floor")
         ->capture_default_str();
     c.add_flag("--detail-anti-lag,!--no-detail-anti-lag", s.detail.antiLag,
-               "detail without a confidence input: follow the current frame where its 5x5 mean "
-               "leaves the fast history's (lighting changed; on by default)");
+               "detail: follow the current frame where its 5x5 mean leaves the fast history's "
+               "(lighting changed; on by default)");
     c.add_flag("--albedo,!--no-albedo", s.albedo.demodulate,
                "Where albedo_<i>.exr exists, filter colour / albedo and multiply it back (on by "
                "default)");

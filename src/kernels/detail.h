@@ -145,7 +145,7 @@ using DetailAccumulateConfidenceKernel = DetailAccumulate<true>;
 
 // History clamping, anti-lag and the A-Trous input, over each pixel's 5x5 window of object
 // pixels (the window sums of the fast history and of the current frame's luminance, window_sums.h):
-// - anti-lag (antiLag, where the caller gives no confidence): where the current frame's mean
+// - anti-lag (antiLag): where the current frame's mean
 //   differs from the fast history's by more than 3 standard errors of the current mean, the
 //   lighting changed. Both histories are scaled towards the current level, by the ratio of the
 //   means to the power min(1, 3 change) (the level follows, the detail is kept), and the

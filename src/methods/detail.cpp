@@ -84,17 +84,17 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
                   c.device().run(DetailTemporalStageStep{reproject, accumulate});
               });
 
-    // The anti-lag only where the caller gives no confidence (the frame's, known per frame).
-    // The fast history's window sums in windowSums (free after the firefly removal).
+    // The anti-lag runs with a caller's confidence too: the renderer's gradients (A-SVGF) take
+    // most of a switched light's change, not all. The fast history's window sums in windowSums (free after the firefly removal).
     ResourceId lagScale = p.declare(floatImage("lagScale", 1));
     ResourceId currentSums = p.declare(floatImage("currentSums", 3));
     constexpr int kWindow = DetailClampKernel::kRadius;
     p.addPass("detail-clamp", StepKind::DetailClamp,
-              with(gbufferReads(f), {p.frame(), in, fast, slow, moments, length}),
+              with(gbufferReads(f), {in, fast, slow, moments, length}),
               {fast, slow, length, variance, lagScale, f.windowSums, currentSums}, kNarrowWindow,
               [=](const PassContext& c) {
                   const GBufferView g = gbuffer(c, f);
-                  const bool antiLag = d.antiLag && !c.frame().confidence.data;
+                  const bool antiLag = d.antiLag;
                   c.device().run(DetailClampStep{
                       {g, c.planes(fast), c.planeSet(f.windowSums), kWindow},
                       {g, c.planes(in), c.planeSet(currentSums), kWindow},
