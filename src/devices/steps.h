@@ -145,15 +145,28 @@ AccumulateModulated<MaxRadius> accumulateForm(const AccumulateModulatedKernel& k
     return {k.g,     k.rowSums, k.current, k.reprojected, k.validity, k.out,
             k.alpha, k.clampK,  k.radius,  k.albedo,      k.rgbOut};
 }
-// The detail accumulation's form for the frame: with the confidence where the frame has one.
+// The detail method's temporal stage on both devices, split (the history handed on through
+// `history`, kDetailHistoryPlanes working planes): the bilinear reprojection, the sparse 3x3
+// search, the accumulation (its form with the confidence where the frame has one: that form's
+// per-pixel type switch keeps the CPU's loop scalar).
 template <class Launch>
-void launchDetailAccumulate(const DetailAccumulateKernel& a, Launch&& launch) {
+void runDetailTemporalStep(const DetailTemporalStageStep& s, PlaneSet history, Launch&& launch) {
+    DetailReprojectKernel reproject = s.reproject;
+    reproject.history = history;
+    launch(reproject);
+    const DetailReprojectKernel& r = reproject;
+    launch(DetailReprojectSearchKernel{r.g, r.previous, r.objects, r.objectCount, r.derivatives,
+                                       r.test, r.previousSlow, r.previousFast, r.previousMoments,
+                                       r.previousLength, r.history, r.validity, r.hasHistory});
+    const DetailAccumulateKernel& a = s.accumulate;
     if (a.confidence.data)
-        launch(DetailAccumulateConfidenceKernel{a.g, a.radiance, a.history, a.validity,
-                                                a.confidence, a.slow, a.fast, a.moments, a.length,
-                                                a.maxHistory, a.fastHistory, a.momentsAlpha});
+        launch(DetailAccumulateConfidenceKernel{a.g, a.radiance, history, a.validity, a.confidence,
+                                                a.slow, a.fast, a.moments, a.length, a.maxHistory,
+                                                a.fastHistory, a.momentsAlpha});
     else
-        launch(a);
+        launch(DetailAccumulateKernel{a.g, a.radiance, history, a.validity, a.confidence, a.slow,
+                                      a.fast, a.moments, a.length, a.maxHistory, a.fastHistory,
+                                      a.momentsAlpha});
 }
 template <bool Search3x3>
 SvgfReproject<Search3x3> svgfReprojectForm(const SvgfReprojectKernel& k) {

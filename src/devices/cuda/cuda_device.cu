@@ -319,18 +319,10 @@ class CudaDevice final : public Device {
             s.modulated ? launch(k) : launch(svgfAtrousForm<-1, false, false>(k));
     }
     void run(const DetailTemporalStageStep& s) override {
-        DetailReprojectKernel reproject = s.reproject;
-        reproject.history = {detailHistory_.data(), layout_.planeSize};
-        launch(reproject);
-        launch(DetailReprojectSearchKernel{
-            reproject.g, reproject.previous, reproject.objects, reproject.objectCount,
-            reproject.derivatives, reproject.test, reproject.previousSlow, reproject.previousFast,
-            reproject.previousMoments, reproject.previousLength, reproject.history,
-            reproject.validity, reproject.hasHistory});
-        DetailAccumulateKernel accumulate = s.accumulate;
-        accumulate.history = reproject.history;
-        launchDetailAccumulate(accumulate, [this](const auto& k) { launch(k); });
+        runDetailTemporalStep(s, {detailHistory_.data(), layout_.planeSize},
+                              [this](const auto& k) { launch(k); });
     }
+
     void run(const DetailClampStep& s) override {
         launch(s.fastRows);
         launch(s.currentRows);
