@@ -15,7 +15,8 @@ namespace {
 using test::makeFrame;
 using test::SceneDescription;
 
-const Method kEveryMethod[] = {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf};
+const Method kEveryMethod[] = {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf,
+                               Method::Detail};
 
 DenoiserSettings settingsFor(Method method) {
     DenoiserSettings s = test::cpuSettings(method);

@@ -69,7 +69,8 @@ TEST(Denoiser, LaterFramesAllocateNothing) {
     d.width = 40;
     d.height = 24;
     Frame frame = makeFrame(d);
-    for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf})
+    for (Method method :
+         {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf, Method::Detail})
         for (SpatialFilter filter : {SpatialFilter::Jbf, SpatialFilter::Atrous}) {
             Denoiser denoiser(settingsFor(method, filter));
             denoiser.processFrame(frame);
@@ -424,7 +425,7 @@ TEST(Denoiser, ARefusedFrameLeavesTheHistoryAsItWas) {
     std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 48, 32, 3);
     Frame bad = frames[2];
     bad.objectId[40] = int(bad.objectToWorld.size());
-    for (Method method : {Method::Temporal, Method::Svgf}) {
+    for (Method method : {Method::Temporal, Method::Svgf, Method::Detail}) {
         Denoiser plain(settingsFor(method)), interrupted(settingsFor(method));
         plain.processFrame(frames[0]);
         interrupted.processFrame(frames[0]);

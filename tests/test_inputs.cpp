@@ -42,7 +42,8 @@ TEST(MotionVectors, FromTheMatricesGiveTheMatrixPathsResult) {
     // ulp more (1.16e-4 at one value in a debug build): 1e-3 there.
     // (The single-frame methods ignore the motion: the same result too.)
     for (auto [isa, tolerance] : {std::pair{CpuIsa::Scalar, 1e-4}, std::pair{CpuIsa::Auto, 1e-3}})
-        for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf}) {
+        for (Method method :
+             {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf, Method::Detail}) {
             const DenoiserSettings s = test::cpuSettings(method);
             Denoiser matrices = makeTunedDenoiser(s, {isa, TilePasses::Auto});
             Denoiser motion = makeTunedDenoiser(s, {isa, TilePasses::Auto});
@@ -275,7 +276,7 @@ TEST(MotionVectors, NonFiniteMotionGivesAFiniteResult) {
     for (Frame& f : frames)
         for (std::size_t p = 0; p < f.motion->pixelCount(); p += 7)
             f.motion->pixels[3 * p + p % 3] = p % 2 ? NAN : INFINITY;
-    for (Method method : {Method::Temporal, Method::Svgf}) {
+    for (Method method : {Method::Temporal, Method::Svgf, Method::Detail}) {
         Denoiser d(test::cpuSettings(method));
         for (const Frame& f : frames)
             for (float v : d.processFrame(f).pixels) ASSERT_TRUE(std::isfinite(v));
