@@ -85,7 +85,8 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
               });
 
     // The anti-lag runs with a caller's confidence too: the renderer's gradients (A-SVGF) take
-    // most of a switched light's change, not all. The fast history's window sums in windowSums (free after the firefly removal).
+    // most of a switched light's change, not all. The fast history's window sums in windowSums
+    // (free after the firefly removal).
     ResourceId lagScale = p.declare(floatImage("lagScale", 1));
     ResourceId currentSums = p.declare(floatImage("currentSums", 3));
     constexpr int kWindow = DetailClampKernel::kRadius;
@@ -117,29 +118,8 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
                        c.floats(length), c.planeSet(variance), wide, kShortHistory}});
               });
 
-    // The iterations ping-pong between filterA and filterB; the last writes the output.
-    ResourceId src = variance;
-    for (int it = 0; it < d.iterations; ++it) {
-        const bool modulated = it == d.iterations - 1;
-        const ResourceId dst = src.index == filterA.index ? filterB : filterA;
-        const int stride = 1 << it;
-        std::vector<ResourceId> reads = with(gbufferReads(f), {src, derivatives});
-        if (modulated) reads.push_back(f.albedo);
-        p.addPass(fmt::format("detail-atrous{}", it), StepKind::SvgfAtrousIteration, reads,
-                  {modulated ? p.output() : dst}, 2 * stride, [=](const PassContext& c) {
-                      SvgfAtrousModulatedKernel iteration{gbuffer(c, f),   c.planeSet(derivatives),
-                                                          c.planeSet(src), {},
-                                                          stride,          terms};
-                      if (modulated) {
-                          iteration.albedo = c.planes(f.albedo);
-                          iteration.rgbOut = c.output();
-                      } else {
-                          iteration.out = c.planeSet(dst);
-                      }
-                      c.device().run(SvgfAtrousIterationStep{iteration, modulated});
-                  });
-        src = dst;
-    }
+    declareGuidedIterations(p, f, "detail-atrous", derivatives, variance, filterA, filterB,
+                            d.iterations, terms);
     return f;
 }
 

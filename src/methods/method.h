@@ -58,6 +58,15 @@ ResourceId declareDespeckle(Pipeline& pipeline, const DenoiserSettings& settings
 void declareSpatialFilter(Pipeline& pipeline, const DenoiserSettings& settings,
                           const FrameImages& images, SpatialFilter filter, ResourceId in,
                           ResourceId out, ResourceId scratch, bool modulateLast);
+// The variance-guided A-Trous iterations (svgf's and detail's) of `in` (rgb + variance), named
+// prefix0, prefix1, ...: they ping-pong between filterA and filterB, iteration
+// `feedbackIteration` (-1: none) writing `feedback` instead (and the next one reading it from
+// there); the last one writes the output times the albedo, unless it is the feedback one: then
+// a modulate pass follows.
+void declareGuidedIterations(Pipeline& pipeline, const FrameImages& images,
+                             const std::string& prefix, ResourceId derivatives, ResourceId in,
+                             ResourceId filterA, ResourceId filterB, int iterations,
+                             SvgfTerms terms, int feedbackIteration = -1, ResourceId feedback = {});
 // "modulate": the albedo multiplied back into `source` (its first three planes), written into
 // the output.
 void declareModulate(Pipeline& pipeline, const FrameImages& images, ResourceId source);

@@ -211,6 +211,38 @@ void declareSpatialFilter(Pipeline& p, const DenoiserSettings& settings, const F
     }
 }
 
+void declareGuidedIterations(Pipeline& p, const FrameImages& f, const std::string& prefix,
+                             ResourceId derivatives, ResourceId in, ResourceId filterA,
+                             ResourceId filterB, int iterations, SvgfTerms terms,
+                             int feedbackIteration, ResourceId feedback) {
+    ResourceId src = in;
+    for (int it = 0; it < iterations; ++it) {
+        const bool isFeedback = it == feedbackIteration;
+        const bool last = it == iterations - 1;
+        const bool modulated = last && !isFeedback;
+        const ResourceId dst =
+            isFeedback ? feedback : (src.index == filterA.index ? filterB : filterA);
+        const int stride = 1 << it;
+        std::vector<ResourceId> reads = with(gbufferReads(f), {src, derivatives});
+        if (modulated) reads.push_back(f.albedo);
+        p.addPass(fmt::format("{}{}", prefix, it), StepKind::SvgfAtrousIteration, reads,
+                  {modulated ? p.output() : dst}, 2 * stride, [=](const PassContext& c) {
+                      SvgfAtrousModulatedKernel iteration{gbuffer(c, f),   c.planeSet(derivatives),
+                                                          c.planeSet(src), {},
+                                                          stride,          terms};
+                      if (modulated) {
+                          iteration.albedo = c.planes(f.albedo);
+                          iteration.rgbOut = c.output();
+                      } else {
+                          iteration.out = c.planeSet(dst);
+                      }
+                      c.device().run(SvgfAtrousIterationStep{iteration, modulated});
+                  });
+        if (last && !modulated) declareModulate(p, f, dst);
+        src = dst;
+    }
+}
+
 void declareModulate(Pipeline& p, const FrameImages& f, ResourceId source) {
     p.addPass("modulate", StepKind::Modulate, {source, f.albedo}, {p.output()}, 0,
               [f, source](const PassContext& c) {

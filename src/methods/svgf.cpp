@@ -103,36 +103,10 @@ FrameImages declareSvgf(Pipeline& p, const DenoiserSettings& settings) {
                                                    kShortHistory}});
               });
 
-    // The iterations read the variance pass's output (kept for the debug view), then ping-pong
-    // between filterA and filterB; the feedback iteration writes next frame's colour history,
-    // and the next iteration reads it from there. The last one writes the output (modulated)
-    // from registers, unless it is the feedback one: then a modulate pass follows.
-    ResourceId src = variance;
-    for (int it = 0; it < sv.iterations; ++it) {
-        const bool isFeedback = it == sv.feedbackIteration;
-        const bool last = it == sv.iterations - 1;
-        const bool modulated = last && !isFeedback;
-        const ResourceId dst =
-            isFeedback ? feedback : (src.index == filterA.index ? filterB : filterA);
-        const int stride = 1 << it;
-        std::vector<ResourceId> reads = with(gbufferReads(f), {src, derivatives});
-        if (modulated) reads.push_back(f.albedo);
-        p.addPass(fmt::format("svgf-atrous{}", it), StepKind::SvgfAtrousIteration, reads,
-                  {modulated ? p.output() : dst}, 2 * stride, [=](const PassContext& c) {
-                      SvgfAtrousModulatedKernel iteration{gbuffer(c, f),   c.planeSet(derivatives),
-                                                          c.planeSet(src), {},
-                                                          stride,          terms};
-                      if (modulated) {
-                          iteration.albedo = c.planes(f.albedo);
-                          iteration.rgbOut = c.output();
-                      } else {
-                          iteration.out = c.planeSet(dst);
-                      }
-                      c.device().run(SvgfAtrousIterationStep{iteration, modulated});
-                  });
-        if (last && !modulated) declareModulate(p, f, dst);
-        src = dst;
-    }
+    // The iterations read the variance pass's output (kept for the debug view); the feedback
+    // iteration writes next frame's colour history.
+    declareGuidedIterations(p, f, "svgf-atrous", derivatives, variance, filterA, filterB,
+                            sv.iterations, terms, sv.feedbackIteration, feedback);
     return f;
 }
 
