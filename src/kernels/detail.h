@@ -144,13 +144,12 @@ using DetailAccumulateKernel = DetailAccumulate<false>;
 using DetailAccumulateConfidenceKernel = DetailAccumulate<true>;
 
 // History clamping, anti-lag and the A-Trous input, over each pixel's 5x5 window of object
-// pixels (the window sums of the fast history and of the current frame's luminance, window_sums.h):
-// - anti-lag (antiLag): where the current frame's mean
-//   differs from the fast history's by more than 3 standard errors of the current mean, the
-//   lighting changed. Both histories are scaled towards the current level, by the ratio of the
-//   means to the power min(1, 3 change) (the level follows, the detail is kept), and the
-//   history length is cut by (1 - change)^4 (as SVGF's anti-lag), so that the next frames take
-//   the new lighting up;
+// pixels (window sums of the fast history and of the current frame's luminance):
+// - anti-lag (antiLag): where the current frame's mean differs from the fast history's by more
+//   than 3 standard errors of the current mean, the lighting changed. Both histories are
+//   scaled towards the current level by the ratio of the means to the power min(1, 3 change)
+//   (the level follows, the detail is kept), and the history length is cut by (1 - change)^4
+//   (as SVGF's anti-lag), so that the next frames take the new lighting up;
 // - the clamp: the slow history into the fast one's mean +- clampSigma standard deviations, per
 //   channel; where that moved it, the history length is cut towards the fast history's in
 //   proportion to the move over the box's half width.
