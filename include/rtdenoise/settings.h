@@ -103,8 +103,8 @@ struct DetailSettings {
     float clampSigma = 1.5f;      // [>=0] slow history clamped to the fast one's 5x5 mean +- this
                                   // many standard deviations (0: no clamp)
     float momentsAlpha = 0.2f;    // [0, 1] luminance moments: weight of the current frame
-    bool antiLag = true;  // where the current frame's 5x5 mean leaves the fast history's,
-                          // follow it (lighting changed); with a confidence input too
+    bool antiLag = true;          // where the current frame's 5x5 mean leaves the fast history's,
+                                  // follow it (lighting changed); with a confidence input too
 };
 
 // Albedo demodulation (every method): where a frame has an albedo, filter the illumination
