@@ -168,6 +168,15 @@ void runDetailTemporalStep(const DetailTemporalStageStep& s, PlaneSet history, L
                                       a.fast, a.moments, a.length, a.maxHistory, a.fastHistory,
                                       a.momentsAlpha});
 }
+// The detail method's clamp step, alike on both devices: the two window sums, the clamp and
+// anti-lag, then the fast history's scaling (after every neighbour's read of it).
+template <class Launch>
+void runDetailClampStep(const DetailClampStep& s, Launch&& launch) {
+    launch(s.fastRows);
+    launch(s.currentRows);
+    launch(s.clamp);
+    launch(s.scale);
+}
 template <bool Search3x3>
 SvgfReproject<Search3x3> svgfReprojectForm(const SvgfReprojectKernel& k) {
     return {k.g,

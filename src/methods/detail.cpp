@@ -10,10 +10,6 @@
 //          -> detail-atrous0 .. detail-atrous{iterations-1} (the last one modulated)
 //   detail-temporal: reprojection of both histories (3x3 search where the bilinear taps fail),
 //   accumulation (scaled by the caller's confidence where given)
-#include <fmt/format.h>
-
-#include <algorithm>
-
 #include "methods/method.h"
 
 namespace rtd {

@@ -7,8 +7,6 @@
 //          -> svgf-atrous0 .. svgf-atrous{iterations-1} -> [modulate]
 //   svgf-temporal: reprojection (3x3 search where the bilinear taps fail) and accumulation (the
 //   device picks: split on the CPU, one fused pass on a GPU)
-#include <fmt/format.h>
-
 #include <algorithm>
 
 #include "methods/method.h"

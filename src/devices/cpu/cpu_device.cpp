@@ -137,10 +137,7 @@ class CpuDevice final : public Device {
     }
 
     void run(const DetailClampStep& s) override {
-        launch(s.fastRows);
-        launch(s.currentRows);
-        launch(s.clamp);
-        launch(s.scale);
+        runDetailClampStep(s, [this](const auto& k) { launch(k); });
     }
     void run(const ModulateStep& s) override { launch(s.modulate); }
 
