@@ -268,6 +268,12 @@ py::dict frameDict(rtd::Frame&& frame) {
     result["motion"] = frame.motion ? py::object(arrayOf(std::move(*frame.motion))) : py::none();
     result["confidence"] =
         frame.confidence ? py::object(arrayOf(std::move(*frame.confidence), true)) : py::none();
+    result["specular"] =
+        frame.specular ? py::object(arrayOf(std::move(*frame.specular))) : py::none();
+    result["roughness"] =
+        frame.roughness ? py::object(arrayOf(std::move(*frame.roughness), true)) : py::none();
+    result["hit_distance"] =
+        frame.hitDistance ? py::object(arrayOf(std::move(*frame.hitDistance), true)) : py::none();
     const auto objects = static_cast<py::ssize_t>(frame.objectToWorld.size());
     result["object_count"] = frame.objectCount > 0 ? frame.objectCount : int(objects);
     if (objects > 0) {

@@ -57,6 +57,19 @@ void checkObjectIds(const std::int32_t* ids, int w, int h, int objectCount) {
     }
 }
 
+// The split signal: roughness (and the optional hit distance) go with specular.
+void checkSplitSignal(bool specular, bool roughness, bool hitDistance) {
+    if (specular && !roughness)
+        throw Error(ErrorCode::InvalidInput,
+                    "frame: specular is given without roughness (the split signal needs both)");
+    if (roughness && !specular)
+        throw Error(ErrorCode::InvalidInput,
+                    "frame: roughness is given without specular (it is read only with specular)");
+    if (hitDistance && !specular)
+        throw Error(ErrorCode::InvalidInput,
+                    "frame: hitDistance is given without specular (it is read only with specular)");
+}
+
 void checkFrame(const Frame& f) {
     int w = f.width(), h = f.height();
     if (w <= 0 || h <= 0) throw Error(ErrorCode::InvalidInput, "frame: empty beauty image");
@@ -71,6 +84,10 @@ void checkFrame(const Frame& f) {
             fmt::format("frame: motion has {} channels, expected 2 to 4", f.motion->channels));
     if (f.motion) checkImage(*f.motion, w, h, f.motion->channels, "motion");
     if (f.confidence) checkImage(*f.confidence, w, h, 1, "confidence");
+    if (f.specular) checkImage(*f.specular, w, h, 3, "specular");
+    if (f.roughness) checkImage(*f.roughness, w, h, 1, "roughness");
+    if (f.hitDistance) checkImage(*f.hitDistance, w, h, 1, "hitDistance");
+    checkSplitSignal(bool(f.specular), bool(f.roughness), bool(f.hitDistance));
     if (f.objectId.size() != std::size_t(w) * h)
         throw Error(
             ErrorCode::InvalidInput,
@@ -121,6 +138,14 @@ InputLayout inputLayout(const char* name, const ImageView& v, int width, int hei
                view.rowStride == std::size_t(width) * ownBytes &&
                reinterpret_cast<std::uintptr_t>(view.data) % 4 == 0;
     return l;
+}
+
+// The camera's world-space position: worldToCamera's inverse applied to the origin.
+Float3 cameraPosition(const Matrix4& worldToCamera) {
+    Mat4 inverse;
+    if (!invert(toMat4(worldToCamera), inverse)) return {};
+    const float w = inverse.m[3][3] != 0.0f ? inverse.m[3][3] : 1.0f;
+    return {inverse.m[0][3] / w, inverse.m[1][3] / w, inverse.m[2][3] / w};
 }
 
 InputSpan spanOf(const ImageView& v, const void* data) {
@@ -186,6 +211,10 @@ struct Denoiser::Impl {
     Matrix4 previousWorldToScreen;
     // Per frame: the caller's buffers as the device sees them.
     InputBuffer inBeauty, inNormal, inPosition, inDepth, inId, inAlbedo, inMotion, inConfidence;
+    InputBuffer inSpecular, inRoughness, inHitDistance;
+    // What the pipeline was declared for (detail declares its specular passes only for frames
+    // with the split signal).
+    MethodInputs declaredInputs;
 
     Impl(const DenoiserSettings& s, const DeviceTuning& tuning,
          std::shared_ptr<DeviceContext> sharedContext)
@@ -197,13 +226,25 @@ struct Denoiser::Impl {
         stats.passMilliseconds.assign(pipeline.passes().size(), 0.0);
     }
 
+    // Declares the method again for frames that give (or stop giving) what changes its passes;
+    // the images are allocated at the next frame (a new history).
+    void declareFor(const FrameView& f) {
+        MethodInputs inputs;
+        inputs.specular = settings.method == Method::Detail && bool(f.specular);
+        if (inputs.specular == declaredInputs.specular) return;
+        pipeline = Pipeline();
+        images = declareMethod(pipeline, settings, inputs);
+        declaredInputs = inputs;
+        stats.passMilliseconds.assign(pipeline.passes().size(), 0.0);
+    }
+
     const Layout& layout() const { return pipeline.layout(); }
     std::size_t pixels() const { return std::size_t(layout().width) * layout().height; }
 
     void allocate(int w, int h) {
         pipeline.allocate(*device, w, h);
         for (auto* in : {&inBeauty, &inNormal, &inPosition, &inDepth, &inId, &inAlbedo, &inMotion,
-                         &inConfidence})
+                         &inConfidence, &inSpecular, &inRoughness, &inHitDistance})
             *in = InputBuffer{};
         stageOutput = DeviceBuffer<float>();  // made at the first frame that needs it
         hasHistory = false;
@@ -252,6 +293,14 @@ struct Denoiser::Impl {
         // History confidence weighs the history, so only methods with history read it.
         if (f.confidence && reprojects)
             confidence = inputLayout("confidence", f.confidence, w, h, 1, 4, false);
+        // The split signal: only the detail method reads it.
+        std::optional<InputLayout> specular, roughness, hitDistance;
+        if (settings.method == Method::Detail) {
+            if (f.specular) specular = inputLayout("specular", f.specular, w, h, 3, 4, false);
+            if (f.roughness) roughness = inputLayout("roughness", f.roughness, w, h, 1, 4, false);
+            if (f.hitDistance)
+                hitDistance = inputLayout("hitDistance", f.hitDistance, w, h, 1, 4, false);
+        }
         // With matrices, back-projection compares view depths: a ray distance is replaced.
         const bool viewDepth = f.depthKind == DepthKind::RayDistance && !useMotion && reprojects;
         bindInput(inBeauty, beauty, f.space, 3, false);
@@ -265,6 +314,12 @@ struct Denoiser::Impl {
         if (motion) bindInput(inMotion, *motion, f.space, 2, false, true);
         inConfidence.span = {};
         if (confidence) bindInput(inConfidence, *confidence, f.space, 1, false, true);
+        inSpecular.span = {};
+        if (specular) bindInput(inSpecular, *specular, f.space, 3, false, true);
+        inRoughness.span = {};
+        if (roughness) bindInput(inRoughness, *roughness, f.space, 1, false, true);
+        inHitDistance.span = {};
+        if (hitDistance) bindInput(inHitDistance, *hitDistance, f.space, 1, false, true);
         if (viewDepth) {
             ConvertStep convert;
             convert.kind = ConvertStep::Kind::ViewDepth;
@@ -321,6 +376,7 @@ struct Denoiser::Impl {
 
     void process(const FrameView& f, const OutputView& out) {
         checkView(f, out);
+        declareFor(f);
         if (f.width != layout().width || f.height != layout().height) allocate(f.width, f.height);
 
         auto start = Clock::now();
@@ -349,6 +405,10 @@ struct Denoiser::Impl {
                            floats(inAlbedo),
                            inMotion.span,
                            inConfidence.span,
+                           inSpecular.span,
+                           inRoughness.span,
+                           inHitDistance.span,
+                           cameraPosition(f.worldToCamera),
                            f.objectCount,
                            objects.data(),
                            hasHistory ? 1 : 0,
@@ -461,6 +521,7 @@ struct Denoiser::Impl {
         if (f.objectCount < 0 || (f.objectCount > 0 && !f.motion && !f.objectToWorld))
             throw Error(ErrorCode::InvalidInput,
                         "frame: objectToWorld is missing (or give motion vectors)");
+        checkSplitSignal(bool(f.specular), bool(f.roughness), bool(f.hitDistance));
         if (!out.data) throw Error(ErrorCode::InvalidInput, "frame: the output buffer is missing");
         const std::size_t outPixelBytes = out.channels * valueBytes(out.type);
         if ((out.type != DataType::Float32 && out.type != DataType::Float16) ||

@@ -451,6 +451,75 @@ TEST_F(CApi, ConfidenceIsAnOptionalOneChannelImage) {
     for (float v : out) ASSERT_TRUE(std::isfinite(v));
 }
 
+// The optional split signal (read by detail): "specular" as color, "roughness" and
+// "hit_distance" 1 float or half value a pixel; roughness goes with specular and back.
+TEST_F(CApi, TheSplitSignalIsOptionalAndRoughnessGoesWithSpecular) {
+    const Frame& f = frames_[0];
+    const std::size_t w = 64, h = 48;
+    RTDDenoiser detail = rtdNewDenoiser(device_, "detail");
+    ASSERT_NE(detail, nullptr) << takeError(device_).message;
+    std::swap(denoiser_, detail);  // bind() binds denoiser_
+    std::vector<float> out;
+    bind(f, out);
+    std::vector<float> specular(w * h * 3), roughness(w * h, 0.5f), hitDistance(w * h, 2.0f);
+    for (std::size_t i = 0; i < specular.size(); ++i) specular[i] = 0.25f * f.beauty.pixels[i];
+    std::vector<std::uint16_t> halfRoughness(w * h, 0x3800);  // 0.5
+    EXPECT_EQ(rtdSetImage(denoiser_, "roughness", roughness.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0),
+              RTD_ERROR_INVALID_ARGUMENT);
+    LastError e = takeError(device_);
+    EXPECT_NE(e.message.find("roughness: format 3 does not fit, expected 1 float or half"),
+              std::string::npos)
+        << e.message;
+    EXPECT_EQ(rtdSetImage(denoiser_, "specular", specular.data(), RTD_FORMAT_FLOAT, w, h, 0, 0),
+              RTD_ERROR_INVALID_ARGUMENT);
+    takeError(device_);
+    // Specular without roughness.
+    ASSERT_EQ(rtdSetImage(denoiser_, "specular", specular.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0),
+              RTD_ERROR_NONE);
+    EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_INVALID_INPUT);
+    e = takeError(device_);
+    EXPECT_NE(e.message.find("specular is given without roughness"), std::string::npos)
+        << e.message;
+    // Roughness (and the hit distance) without specular.
+    ASSERT_EQ(rtdSetImage(denoiser_, "specular", nullptr, RTD_FORMAT_FLOAT3, w, h, 0, 0),
+              RTD_ERROR_NONE);
+    ASSERT_EQ(
+        rtdSetImage(denoiser_, "roughness", halfRoughness.data(), RTD_FORMAT_HALF, w, h, 0, 0),
+        RTD_ERROR_NONE);
+    EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_INVALID_INPUT);
+    e = takeError(device_);
+    EXPECT_NE(e.message.find("roughness is given without specular"), std::string::npos)
+        << e.message;
+    // Another size.
+    ASSERT_EQ(rtdSetImage(denoiser_, "specular", specular.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0),
+              RTD_ERROR_NONE);
+    ASSERT_EQ(rtdSetImage(denoiser_, "hit_distance", hitDistance.data(), RTD_FORMAT_FLOAT, w, h / 2,
+                          0, 0),
+              RTD_ERROR_NONE);
+    EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_INVALID_ARGUMENT);
+    e = takeError(device_);
+    EXPECT_NE(e.message.find("the image 'hit_distance' is 64x24, but 'color' is 64x48"),
+              std::string::npos)
+        << e.message;
+    // All three: a finite result, for a few frames (the history too).
+    ASSERT_EQ(
+        rtdSetImage(denoiser_, "hit_distance", hitDistance.data(), RTD_FORMAT_FLOAT, w, h, 0, 0),
+        RTD_ERROR_NONE);
+    for (int frame = 0; frame < 2; ++frame) {
+        ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE) << takeError(device_).message;
+        for (float v : out) ASSERT_TRUE(std::isfinite(v));
+    }
+    // An unknown name lists them.
+    EXPECT_EQ(rtdSetImage(denoiser_, "gloss", specular.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0),
+              RTD_ERROR_INVALID_ARGUMENT);
+    e = takeError(device_);
+    EXPECT_NE(e.message.find("confidence, specular, roughness, hit_distance, output"),
+              std::string::npos)
+        << e.message;
+    std::swap(denoiser_, detail);
+    rtdReleaseDenoiser(detail);
+}
+
 TEST_F(CApi, ErrorsReachTheCallbackAndTheFirstIsKept) {
     struct Heard {
         int calls = 0;

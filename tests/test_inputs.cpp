@@ -396,5 +396,218 @@ TEST(Confidence, SequenceFoldersReadConfidenceFiles) {
     EXPECT_FALSE(Sequence(dir.path()).readFrame(0).confidence.has_value());
 }
 
+// ---- the split signal (specular, roughness, hit distance: read by method detail only) ----
+
+// A frame with a split signal of the frame's size: specular a part of beauty, varied values.
+Frame withSplitSignal(const Frame& frame, bool hitDistance = true) {
+    Frame f = frame;
+    const int w = f.width(), h = f.height();
+    f.specular = Image(w, h, 3);
+    f.roughness = Image(w, h, 1);
+    for (std::size_t p = 0; p < f.beauty.pixelCount(); ++p) {
+        for (int c = 0; c < 3; ++c)
+            f.specular->pixels[3 * p + c] = 0.25f * f.beauty.pixels[3 * p + c];
+        f.roughness->pixels[p] = float(p % 11) / 10.0f;
+    }
+    if (hitDistance) {
+        f.hitDistance = Image(w, h, 1);
+        for (std::size_t p = 0; p < f.beauty.pixelCount(); ++p)
+            f.hitDistance->pixels[p] = p % 5 == 0 ? 0.0f : 0.5f + float(p % 13);
+    }
+    return f;
+}
+
+void expectRefused(Denoiser& d, const Frame& f, const std::string& message) {
+    try {
+        d.processFrame(f);
+        ADD_FAILURE() << "accepted a frame that should fail with: " << message;
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+        EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+}
+
+void expectRefused(Denoiser& d, const FrameView& v, const std::string& message) {
+    std::vector<float> out(3 * std::size_t(v.width) * v.height);
+    try {
+        d.processFrame(v, out.data());
+        ADD_FAILURE() << "accepted a view that should fail with: " << message;
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+        EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+}
+
+// Detail takes the split signal, with and without the hit distance; a finite result.
+TEST(SplitSignal, DetailTakesItWithAFiniteResult) {
+    for (bool hitDistance : {true, false}) {
+        Denoiser d(test::cpuSettings(Method::Detail));
+        for (const Frame& frame : cameraPanFrames()) {
+            const Frame f = withSplitSignal(frame, hitDistance);
+            Image out;
+            ASSERT_NO_THROW(out = d.processFrame(f)) << hitDistance;
+            for (float v : out.pixels) ASSERT_TRUE(std::isfinite(v));
+            // A view of it too (half roughness, RGBA specular).
+            const std::size_t n = f.beauty.pixelCount();
+            std::vector<float> rgba(4 * n, 1.0f);
+            std::vector<std::uint16_t> halfRoughness(n);
+            for (std::size_t p = 0; p < n; ++p) {
+                for (int c = 0; c < 3; ++c) rgba[4 * p + c] = f.specular->pixels[3 * p + c];
+                halfRoughness[p] = floatToHalf(f.roughness->pixels[p]);
+            }
+            FrameView v = viewOf(f);
+            v.specular = ImageView(rgba.data(), DataType::Float32, 4);
+            v.roughness = ImageView(halfRoughness.data(), DataType::Float16, 1);
+            std::vector<float> viewOut(3 * n);
+            ASSERT_NO_THROW(d.processFrame(v, viewOut.data()));
+            for (float value : viewOut) ASSERT_TRUE(std::isfinite(value));
+        }
+    }
+}
+
+// The other methods ignore it (as they ignore the inputs they do not read): the same result.
+TEST(SplitSignal, OtherMethodsIgnoreIt) {
+    for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf}) {
+        Denoiser plain(test::cpuSettings(method)), split(test::cpuSettings(method));
+        for (const Frame& frame : cameraPanFrames())
+            EXPECT_EQ(plain.processFrame(frame).pixels,
+                      split.processFrame(withSplitSignal(frame)).pixels)
+                << toString(method);
+    }
+}
+
+// Roughness and the hit distance go with specular, and specular needs roughness: each missing
+// partner is refused naming both, for a Frame and a FrameView, by every method.
+TEST(SplitSignal, AMissingPartnerIsRefusedNamingIt) {
+    const Frame good = withSplitSignal(cameraPanFrames()[0]);
+    for (Method method : {Method::Detail, Method::Svgf}) {
+        Denoiser d(test::cpuSettings(method));
+        Frame f = good;
+        f.roughness.reset();
+        expectRefused(d, f, "specular is given without roughness");
+        expectRefused(d, viewOf(f), "specular is given without roughness");
+        f = good;
+        f.specular.reset();
+        f.hitDistance.reset();
+        expectRefused(d, f, "roughness is given without specular");
+        expectRefused(d, viewOf(f), "roughness is given without specular");
+        f = good;
+        f.specular.reset();
+        f.roughness.reset();
+        expectRefused(d, f, "hitDistance is given without specular");
+        expectRefused(d, viewOf(f), "hitDistance is given without specular");
+        // Still usable.
+        EXPECT_NO_THROW(d.processFrame(good)) << toString(method);
+    }
+}
+
+// The wrong size, channel count or type is refused naming the input.
+TEST(SplitSignal, AWrongSizeOrLayoutIsRefusedNamingIt) {
+    const Frame good = withSplitSignal(cameraPanFrames()[0]);
+    const int w = good.width(), h = good.height();
+    Denoiser d(test::cpuSettings(Method::Detail));
+    Frame f = good;
+    f.specular = Image(w, h - 1, 3, 0.0f);
+    expectRefused(d, f,
+                  fmt::format("specular is {}x{}x3 ({} values), expected {}x{}x3", w, h - 1,
+                              w * (h - 1) * 3, w, h));
+    f = good;
+    f.roughness = Image(w, h, 3, 0.5f);
+    expectRefused(d, f, "roughness is");
+    f = good;
+    f.hitDistance = Image(w - 1, h, 1, 1.0f);
+    expectRefused(d, f, "hitDistance is");
+    FrameView v = viewOf(good);
+    v.specular = ImageView(good.roughness->pixels.data(), DataType::Float32, 1);
+    expectRefused(d, v, "specular has 1 channels, expected 3 to 4");
+    std::vector<std::int32_t> ids(good.beauty.pixelCount(), 0);
+    v = viewOf(good);
+    v.hitDistance = ImageView(ids.data(), DataType::Int32, 1);
+    expectRefused(d, v, "hitDistance: int32 values are for object IDs only");
+    EXPECT_NO_THROW(d.processFrame(good));
+}
+
+// A folder with specular_<i>.exr, roughness_<i>.exr and hit_distance_<i>.exr: written by
+// writeFrame when the frame has them, read with their frame (roughness and hit distance 1
+// channel; an RGB file's R), and a file of another size is refused naming it, by checkFrames
+// before any pixel and by readFrame.
+TEST(SplitSignal, SequenceFoldersReadTheSplitSignalFiles) {
+    test::TempFolder dir("split-sequence");
+    const std::vector<Frame>& frames = cameraPanFrames();
+    std::vector<Frame> written;
+    for (int i = 0; i < 2; ++i) {
+        written.push_back(withSplitSignal(frames[std::size_t(i)]));
+        writeFrame(dir.path(), i, written.back());
+    }
+    for (const char* stem : {"specular", "roughness", "hit_distance"})
+        ASSERT_TRUE(std::filesystem::exists(dir.path() / fmt::format("{}_1.exr", stem))) << stem;
+    Sequence sequence(dir.path());
+    EXPECT_EQ(sequence.checkFrames(2).size(), 2u);
+    Frame first = sequence.readFrame(0);
+    ASSERT_TRUE(first.specular.has_value());
+    ASSERT_TRUE(first.roughness.has_value());
+    ASSERT_TRUE(first.hitDistance.has_value());
+    EXPECT_EQ(first.specular->channels, 3);
+    EXPECT_EQ(first.roughness->channels, 1);
+    EXPECT_EQ(first.hitDistance->channels, 1);
+    EXPECT_EQ(first.specular->width, first.width());
+    EXPECT_EQ(first.specular->height, first.height());
+    EXPECT_EQ(first.specular->pixels, written[0].specular->pixels);  // FLOAT files: exact
+    EXPECT_EQ(first.roughness->pixels, written[0].roughness->pixels);
+    EXPECT_EQ(first.hitDistance->pixels, written[0].hitDistance->pixels);
+    // An RGB roughness file: its R channel.
+    const int w = first.width(), h = first.height();
+    Image rgb(w, h, 3, 0.0f);
+    for (std::size_t p = 0; p < rgb.pixelCount(); ++p) {
+        rgb.pixels[3 * p] = float(p % 7) / 7.0f;
+        rgb.pixels[3 * p + 1] = 1.0f;
+    }
+    writeExr(dir.path() / "roughness_1.exr", rgb);
+    Frame second = sequence.readFrame(1);
+    ASSERT_TRUE(second.roughness.has_value());
+    ASSERT_EQ(second.roughness->channels, 1);
+    for (std::size_t p = 0; p < rgb.pixelCount(); ++p)
+        ASSERT_EQ(second.roughness->pixels[p], rgb.pixels[3 * p]);
+    // A denoiser takes the frames as read.
+    Denoiser d(test::cpuSettings(Method::Detail));
+    EXPECT_NO_THROW(d.processFrame(first));
+    EXPECT_NO_THROW(d.processFrame(second));
+    // Another size, for each file.
+    for (const char* stem : {"specular", "roughness", "hit_distance"}) {
+        const std::filesystem::path file = dir.path() / fmt::format("{}_1.exr", stem);
+        const std::filesystem::path saved = dir.path() / "saved.exr";
+        std::filesystem::copy_file(file, saved, std::filesystem::copy_options::overwrite_existing);
+        writeExr(file, Image(w - 1, h, std::string(stem) == "specular" ? 3 : 1, 1.0f));
+        for (int pass = 0; pass < 2; ++pass) {
+            try {
+                if (pass == 0)
+                    sequence.checkFrames(2);
+                else
+                    sequence.readFrame(1);
+                ADD_FAILURE() << "accepted a " << w - 1 << "x" << h << " " << stem;
+            } catch (const Error& e) {
+                EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+                EXPECT_NE(std::string(e.what()).find(
+                              fmt::format("{}: {}x{}, but ", file.string(), w - 1, h)),
+                          std::string::npos)
+                    << e.what();
+            }
+        }
+        std::filesystem::rename(saved, file);
+    }
+    // Roughness without specular in a folder: read as it is, refused by the denoiser naming it.
+    std::filesystem::remove(dir.path() / "specular_0.exr");
+    Frame noSpecular = sequence.readFrame(0);
+    EXPECT_FALSE(noSpecular.specular.has_value());
+    EXPECT_TRUE(noSpecular.roughness.has_value());
+    Denoiser fresh(test::cpuSettings(Method::Detail));
+    expectRefused(fresh, noSpecular, "roughness is given without specular");
+    // A frame without them writes none.
+    test::TempFolder plain("split-plain");
+    writeFrame(plain.path(), 0, frames[0]);
+    EXPECT_FALSE(std::filesystem::exists(plain.path() / "specular_0.exr"));
+    EXPECT_FALSE(Sequence(plain.path()).readFrame(0).specular.has_value());
+}
+
 }  // namespace
 }  // namespace rtd

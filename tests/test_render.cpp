@@ -429,6 +429,226 @@ TEST(Render, UnknownSceneIsAnErrorListingTheScenes) {
     EXPECT_FALSE(fs::exists(dir.path() / "out"));
 }
 
+// ---- the split signal (specular, roughness, hit distance) ----
+
+// The reflections scene with every glossy lobe removed (diffuse materials only).
+Scene withoutGlossyLobes(Scene scene) {
+    for (Object& o : scene.objects) o.material.specular = 0.0f;
+    return scene;
+}
+
+TEST(RenderSplit, SpecularIsExactlyZeroWithoutAGlossyLobe) {
+    TraceSettings t;
+    t.width = 32;
+    t.height = 24;
+    t.samplesPerPixel = 2;
+    Image specular;
+    const Image beauty =
+        renderRadiance(withoutGlossyLobes(buildScene("reflections", 0)), t, &specular);
+    ASSERT_EQ(specular.width, 32);
+    ASSERT_EQ(specular.height, 24);
+    ASSERT_EQ(specular.channels, 3);
+    EXPECT_GT(pixelMean(beauty, 0).mean, 0.01);
+    for (float v : specular.pixels) ASSERT_EQ(v, 0.0f);
+}
+
+TEST(RenderSplit, SpecularIsTheGlossyPartOfTheSameBeauty) {
+    const Scene scene = buildScene("reflections", 0);
+    TraceSettings t;
+    t.width = 48;
+    t.height = 36;
+    t.samplesPerPixel = 4;
+    Image specular;
+    const Image split = renderRadiance(scene, t, &specular);
+    // The beauty and its random numbers are the same with or without the split.
+    EXPECT_EQ(split.pixels, renderRadiance(scene, t).pixels);
+    // Every term of the glossy part is at most the whole term (all values are >= 0), so per
+    // channel 0 <= specular <= beauty up to rounding: the diffuse part is beauty - specular.
+    for (std::size_t i = 0; i < specular.pixels.size(); ++i) {
+        ASSERT_TRUE(std::isfinite(specular.pixels[i]));
+        ASSERT_GE(specular.pixels[i], 0.0f);
+        ASSERT_LE(specular.pixels[i], split.pixels[i] * (1.0f + 1e-4f) + 1e-6f) << "value " << i;
+    }
+    // The near-mirror sphere (specular 0.95, exponent 5000) is mostly specular; the diffuse
+    // block has none (inside its outline: the samples of an edge pixel see its neighbours).
+    const Frame g = renderGBuffer(scene, t.width, t.height);
+    const int mirror = objectIndex(scene, "mirror sphere"), block = objectIndex(scene, "block");
+    double mirrorBeauty = 0.0, mirrorSpecular = 0.0, blockSpecular = 0.0;
+    int mirrorPixels = 0, blockPixels = 0;
+    for (int y = 1; y + 1 < t.height; ++y)
+        for (int x = 1; x + 1 < t.width; ++x) {
+            const int id = g.objectId[std::size_t(y) * t.width + x];
+            bool inside = true;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                    inside = inside && g.objectId[std::size_t(y + dy) * t.width + x + dx] == id;
+            if (!inside) continue;
+            if (id == mirror) {
+                mirrorBeauty += luminance(pixelVec(split, x, y));
+                mirrorSpecular += luminance(pixelVec(specular, x, y));
+                ++mirrorPixels;
+            } else if (id == block) {
+                blockSpecular += maxComponent(pixelVec(specular, x, y));
+                ++blockPixels;
+            }
+        }
+    ASSERT_GT(mirrorPixels, 20);
+    ASSERT_GT(blockPixels, 0);
+    EXPECT_GT(mirrorSpecular, 0.85 * mirrorBeauty);
+    EXPECT_EQ(blockSpecular, 0.0);
+    // The glossy floor (specular 0.3) holds some of both.
+    double specularTotal = 0.0, beautyTotal = 0.0;
+    for (std::size_t i = 0; i < split.pixels.size(); ++i) {
+        specularTotal += specular.pixels[i];
+        beautyTotal += split.pixels[i];
+    }
+    EXPECT_GT(specularTotal, 0.05 * beautyTotal);
+    EXPECT_LT(specularTotal, 0.95 * beautyTotal);
+}
+
+float expectedRoughness(float exponent) {
+    return std::sqrt(std::sqrt(2.0f / (exponent + 2.0f)));
+}
+
+TEST(RenderSplit, GBufferHasRoughnessAndTheDiffuseAlbedo) {
+    for (int frame : {0, 7}) {
+        const Scene scene = buildScene("reflections", frame);
+        const Frame plain = renderGBuffer(scene, 40, 30);
+        const Frame split = renderGBuffer(scene, 40, 30, true);
+        EXPECT_FALSE(plain.roughness.has_value());
+        EXPECT_FALSE(plain.hitDistance.has_value());
+        ASSERT_TRUE(split.roughness.has_value());
+        ASSERT_TRUE(split.hitDistance.has_value());
+        ASSERT_EQ(split.roughness->channels, 1);
+        ASSERT_EQ(split.hitDistance->channels, 1);
+        // Everything else is the default G-buffer's.
+        EXPECT_EQ(split.objectId, plain.objectId);
+        EXPECT_EQ(split.depth.pixels, plain.depth.pixels);
+        EXPECT_EQ(split.normal.pixels, plain.normal.pixels);
+        for (int y = 0; y < 30; ++y)
+            for (int x = 0; x < 40; ++x) {
+                const int id = split.objectId[std::size_t(y) * 40 + x];
+                const float r = split.roughness->at(x, y);
+                if (id < 0) {
+                    EXPECT_EQ(r, 0.0f);
+                    EXPECT_EQ(split.hitDistance->at(x, y), 0.0f);
+                    continue;
+                }
+                const Material& m = scene.objects[id].material;
+                if (m.specular > 0.0f) {
+                    EXPECT_NEAR(r, expectedRoughness(m.exponent), 1e-6f);
+                } else {
+                    EXPECT_EQ(r, 1.0f);
+                    EXPECT_EQ(split.hitDistance->at(x, y), 0.0f);
+                }
+                // The default albedo (texture (1 - s) + s) is the diffuse albedo plus s.
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(plain.albedo->at(x, y, c), split.albedo->at(x, y, c) + m.specular,
+                                1e-6f);
+                // The closed room: every mirror ray hits something.
+                if (m.specular > 0.0f) EXPECT_GT(split.hitDistance->at(x, y), 0.0f);
+            }
+    }
+    // A constant texture c: the default albedo is c (1 - s) + s exactly as before.
+    const Scene scene = buildScene("reflections", 0);
+    const Frame plain = renderGBuffer(scene, 40, 30);
+    const int metal = objectIndex(scene, "metal sphere");
+    const Material& m = scene.objects[metal].material;
+    int seen = 0;
+    for (int y = 0; y < 30; ++y)
+        for (int x = 0; x < 40; ++x)
+            if (plain.objectId[std::size_t(y) * 40 + x] == metal) {
+                ++seen;
+                const Vec3 c = m.albedo.a;
+                for (int k = 0; k < 3; ++k)
+                    EXPECT_FLOAT_EQ(plain.albedo->at(x, y, k),
+                                    c[k] * (1.0f - m.specular) + m.specular);
+            }
+    EXPECT_GT(seen, 0);
+    EXPECT_NEAR(expectedRoughness(300.0f), 0.28527f, 1e-5f);  // (2 / 302)^(1/4)
+}
+
+// A camera looking straight at a glossy quad at z = 0 from z = -1, a wall at z = -d behind the
+// camera: the mirror ray of the centre pixel comes back along the axis and hits the wall at d.
+Scene mirrorFacingWall(float d, bool wall, float specular) {
+    Scene s;
+    Material mirror;
+    mirror.albedo = Texture::constant(Vec3(0.5f));
+    mirror.specular = specular;
+    mirror.exponent = 1000.0f;
+    s.objects.push_back({"mirror",
+                         {Primitive::quad({-1.0f, -1.0f, 0.0f}, {0, 2.0f, 0}, {2.0f, 0, 0})},
+                         mirror,
+                         Matrix4::identity(),
+                         false});
+    if (wall)
+        s.objects.push_back({"wall",
+                             {Primitive::quad({-5.0f, -5.0f, -d}, {10.0f, 0, 0}, {0, 10.0f, 0})},
+                             Material{},
+                             Matrix4::identity(),
+                             false});
+    s.camera.position = {0.0f, 0.0f, -1.0f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.verticalFovDegrees = 10.0f;
+    return s;
+}
+
+TEST(RenderSplit, HitDistanceIsTheMirrorRaysDistance) {
+    for (float d : {3.0f, 7.5f}) {
+        const Frame f = renderGBuffer(mirrorFacingWall(d, true, 0.9f), 5, 5, true);
+        ASSERT_EQ(f.objectId[2 * 5 + 2], 0);
+        EXPECT_NEAR(f.hitDistance->at(2, 2), d, 1e-3f * d) << "d " << d;
+        EXPECT_NEAR(f.roughness->at(2, 2), expectedRoughness(1000.0f), 1e-6f);
+        for (int y = 0; y < 5; ++y)  // the wall is large: every mirror ray hits it, near d
+            for (int x = 0; x < 5; ++x) EXPECT_NEAR(f.hitDistance->at(x, y), d, 0.01f * d);
+    }
+    // Nothing to hit, or no glossy lobe: 0 (unknown).
+    Frame f = renderGBuffer(mirrorFacingWall(3.0f, false, 0.9f), 5, 5, true);
+    EXPECT_EQ(f.hitDistance->at(2, 2), 0.0f);
+    f = renderGBuffer(mirrorFacingWall(3.0f, true, 0.0f), 5, 5, true);
+    EXPECT_EQ(f.hitDistance->at(2, 2), 0.0f);
+    EXPECT_EQ(f.roughness->at(2, 2), 1.0f);
+    EXPECT_EQ(f.albedo->at(2, 2, 0), 0.5f);
+}
+
+TEST(RenderSplit, SequenceWritesTheSplitAndRemovesItWithout) {
+    test::TempFolder dir("render-split");
+    RenderSettings settings;
+    settings.width = 24;
+    settings.height = 16;
+    settings.frames = 2;
+    settings.gbufferOnly = true;
+    settings.split = true;
+    const fs::path out = dir.path() / "seq";
+    renderSequence("reflections", settings, out);
+    for (int i = 0; i < 2; ++i) {
+        for (const char* stem : {"specular", "roughness", "hit_distance"})
+            EXPECT_TRUE(fs::exists(out / fmt::format("{}_{}.exr", stem, i))) << stem << i;
+        TraceSettings t;
+        t.width = 24;
+        t.height = 16;
+        t.frameIndex = i;
+        const Frame expected = renderFrame(buildScene("reflections", i), t, true);
+        const Frame f = Sequence(out).readFrame(i);
+        ASSERT_TRUE(f.specular && f.roughness && f.hitDistance && f.albedo);
+        EXPECT_EQ(f.specular->pixels, expected.specular->pixels);
+        EXPECT_EQ(f.roughness->pixels, expected.roughness->pixels);
+        EXPECT_EQ(f.hitDistance->pixels, expected.hitDistance->pixels);
+        EXPECT_EQ(f.albedo->pixels, expected.albedo->pixels);
+        EXPECT_EQ(f.beauty.pixels, renderRadiance(buildScene("reflections", i), t).pixels);
+    }
+    // Without the split, none of them stays to be read as this render's.
+    settings.split = false;
+    renderSequence("reflections", settings, out);
+    for (const char* stem : {"specular", "roughness", "hit_distance"})
+        EXPECT_FALSE(fs::exists(out / fmt::format("{}_0.exr", stem))) << stem;
+    EXPECT_FALSE(Sequence(out).readFrame(0).specular.has_value());
+    // Blender's multilayer files have no such passes.
+    settings.split = true;
+    settings.format = OutputFormat::Multilayer;
+    EXPECT_THROW(validate(settings), Error);
+}
+
 // ---- determinism and the written folder ----
 
 TEST(Render, SameSeedSameImageOtherSeedDifferent) {
@@ -639,6 +859,13 @@ TEST(RenderCli, RendersASequenceAndRejectsBadArguments) {
         r = runCli("render furnace -o " + out + " " + bad);
         EXPECT_NE(r.exitCode, 0) << bad;
     }
+    r = runCli("render reflections -o " + out +
+               " --width 8 --height 6 --frames 1 --gbuffer-only --split");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir.path() / "out" / "specular_0.exr"));
+    EXPECT_TRUE(fs::exists(dir.path() / "out" / "hit_distance_0.exr"));
+    r = runCli("render reflections -o " + out + " --split --format multilayer");
+    EXPECT_NE(r.exitCode, 0);
     r = runCli("render -o " + out);  // no scene
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("furnace"), std::string::npos) << r.output;

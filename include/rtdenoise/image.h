@@ -71,6 +71,15 @@ struct Frame {
     // 1 channel in [0, 1], optional: how far the history of each pixel still holds (NVIDIA NRD's
     // IN_DIFF_CONFIDENCE): 1 keeps it, 0 where the lighting changed (a light switched), drop it.
     std::optional<Image> confidence;
+    // The split signal (optional; NVIDIA NRD's diffuse/specular inputs). specular: 3 channels, the
+    // part of beauty that left the first surface through its glossy lobe (the diffuse part is
+    // beauty - specular; `albedo` then demodulates the diffuse part only, so it should be the
+    // diffuse albedo, as Cycles' DiffCol). roughness: 1 channel in [0, 1] (sqrt of GGX alpha),
+    // needed with specular. hitDistance: 1 channel, world units from the first surface to what
+    // its specular ray hit (0: unknown), optional: it lets reflections be reprojected.
+    std::optional<Image> specular;
+    std::optional<Image> roughness;
+    std::optional<Image> hitDistance;
     std::vector<Matrix4> objectToWorld;  // K matrices, object k's local-to-world (none: motion)
     // With motion vectors and no matrices: IDs are -1..objectCount-1 (0: objectToWorld.size()).
     int objectCount = 0;
@@ -140,6 +149,7 @@ struct OutputView {
 //   current depth. With motion, no matrices are needed: objectCount alone bounds the IDs.
 // - confidence (optional): 1 channel in [0, 1], 1 where the history holds, 0 where the lighting
 //   changed (NRD's IN_DIFF_CONFIDENCE); a value outside [0, 1] is clamped, NaN reads as 1.
+// - specular, roughness, hitDistance (optional, the split signal): as Frame's.
 struct FrameView {
     int width = 0;
     int height = 0;
@@ -153,6 +163,9 @@ struct FrameView {
     ImageView albedo;                        // optional
     ImageView motion;                        // optional: replaces the matrices
     ImageView confidence;                    // optional: history confidence, 1 channel
+    ImageView specular;                      // optional: the specular part of beauty, RGB
+    ImageView roughness;                     // with specular: 1 channel in [0, 1]
+    ImageView hitDistance;                   // optional, with specular: 1 channel
     const Matrix4* objectToWorld = nullptr;  // objectCount matrices (unused with motion)
     int objectCount = 0;
     Matrix4 worldToCamera = Matrix4::identity();
@@ -177,6 +190,13 @@ inline FrameView viewOf(const Frame& frame) {
     if (frame.confidence)
         v.confidence = ImageView(frame.confidence->pixels.data(), DataType::Float32,
                                  frame.confidence->channels);
+    if (frame.specular) v.specular = frame.specular->pixels.data();
+    if (frame.roughness)
+        v.roughness = ImageView(frame.roughness->pixels.data(), DataType::Float32,
+                                frame.roughness->channels);
+    if (frame.hitDistance)
+        v.hitDistance = ImageView(frame.hitDistance->pixels.data(), DataType::Float32,
+                                  frame.hitDistance->channels);
     v.objectToWorld = frame.objectToWorld.data();
     v.objectCount = frame.objectCount > 0 ? frame.objectCount : int(frame.objectToWorld.size());
     v.worldToCamera = frame.worldToCamera;

@@ -101,7 +101,9 @@ class FrameSource {
 
 // A folder in the course layout: beauty_i.exr, normal_i.exr, position_i.exr, depth_i.exr,
 // ID_i.exr, matrix_i.mat, optional albedo_i.exr and confidence_i.exr (history confidence: Y, or
-// the R of an RGB file), for i = 0..frameCount-1.
+// the R of an RGB file), and the optional split signal: specular_i.exr (RGB), roughness_i.exr and
+// hit_distance_i.exr (Y, or the R of an RGB file; Frame::roughness and Frame::hitDistance), for
+// i = 0..frameCount-1.
 class Sequence : public FrameSource {
   public:
     // Discovers the frame count from beauty_<i>.exr; throws if none, or on a gap in the numbering.
@@ -225,8 +227,9 @@ ChannelChoices colourChannelsOf(const std::filesystem::path& file,
 // ---- writing ----
 
 // Writes frame `index` of `frame` in the course layout into `folder` (beauty, normal, position,
-// depth, ID, matrix, and albedo and confidence when the frame has them): what Sequence reads
-// back, the EXRs with writeExr's default options. Creates the folder if needed.
+// depth, ID, matrix, and albedo, confidence, specular, roughness and hit_distance when the frame
+// has them): what Sequence reads back, the EXRs with writeExr's default options. Creates the
+// folder if needed.
 void writeFrame(const std::filesystem::path& folder, int index, const Frame& frame);
 
 // The compressions OpenEXR 3.1 writes. Lossless: none, rle, zips, zip, piz; b44 and b44a too for

@@ -5,8 +5,8 @@
  *   RTDDenoiser den = rtdNewDenoiser(device, "svgf");
  *   rtdSetFloat(den, "sigma-color", 0.6f);                  // the command line's option names
  *   rtdSetImage(den, "color", rgb, RTD_FORMAT_FLOAT3, w, h, 0, 0);   // 0 strides: packed
- *   ... "normal", "position", "depth", "ids", optional "albedo", "motion", "confidence";
- *   "output"
+ *   ... "normal", "position", "depth", "ids", optional "albedo", "motion", "confidence",
+ *   "specular", "roughness", "hit_distance"; "output"
  *   rtdSetMatrices(den, objectToWorld, objectCount, worldToCamera, worldToScreen);
  *   if (rtdExecute(den) != RTD_ERROR_NONE) { const char* m; rtdGetDeviceError(device, &m); }
  *   rtdReleaseDenoiser(den); rtdReleaseDevice(device);
@@ -136,6 +136,12 @@ RTD_API const char* rtdGetString(RTDDenoiser denoiser, const char* name);
  *   "confidence" optional, 1 float or half value in [0, 1]: how far each pixel's history still
  *              holds (NVIDIA NRD's IN_DIFF_CONFIDENCE; 0 where the lighting changed); values
  *              outside are clamped, NaN reads as 1. Read by the methods with history
+ *   "specular" optional, as color: the part of color that left the first surface through its
+ *              glossy lobe (the split signal, NVIDIA NRD's diffuse/specular inputs; "albedo" is
+ *              then the diffuse albedo). Read by method "detail" only; needs "roughness"
+ *   "roughness" with "specular", 1 float or half value in [0, 1] (sqrt of GGX alpha)
+ *   "hit_distance" optional, with "specular": 1 float or half value, world units from the
+ *              first surface to what its specular ray hit (0: unknown)
  *   "output"   the result, written: 3 or 4 values (alpha 1), float or half
  * Pixel (x, y) is at ptr + y * rowStride + x * pixelStride bytes, rows top to bottom; strides 0
  * mean packed. All images are width x height, in host memory, or all in the GPU's memory on a

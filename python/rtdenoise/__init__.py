@@ -129,6 +129,10 @@ class Frame:
     albedo: Optional[np.ndarray] = None  # (H, W, 3)
     motion: Optional[np.ndarray] = None  # (H, W, 2 or 3) pixels: previous = current + motion
     confidence: Optional[np.ndarray] = None  # (H, W) history confidence in [0, 1]
+    # The split signal (method "detail"): the specular part of color, its roughness, hit distance.
+    specular: Optional[np.ndarray] = None  # (H, W, 3)
+    roughness: Optional[np.ndarray] = None  # (H, W) in [0, 1], with specular
+    hit_distance: Optional[np.ndarray] = None  # (H, W) world units (0: unknown), with specular
     matrices: Optional[Matrices] = None  # None for Blender's files (they have motion)
     depth_kind: str = "view-z"  # or "ray-distance"
     object_count: int = 0  # IDs are -1..object_count-1
@@ -149,6 +153,9 @@ class Frame:
             albedo=self.albedo,
             motion=self.motion,
             confidence=self.confidence,
+            specular=self.specular,
+            roughness=self.roughness,
+            hit_distance=self.hit_distance,
             matrices=self.matrices,
             depth_kind=self.depth_kind,
             object_count=self.object_count,
@@ -459,6 +466,9 @@ class Denoiser:
         out: Optional[np.ndarray] = None,
         *,
         confidence: Any = None,
+        specular: Any = None,
+        roughness: Any = None,
+        hit_distance: Any = None,
         depth_kind: Optional[str] = None,
         object_count: Optional[int] = None,
     ) -> np.ndarray:
@@ -474,6 +484,11 @@ class Denoiser:
         object_count: with motion and no matrices, IDs are -1..object_count-1 (None: max + 1).
         confidence (H, W): optional history confidence in [0, 1] (NRD's IN_DIFF_CONFIDENCE: 0
         where the lighting changed, drop the history; clamped, NaN as 1).
+        specular (H, W, 3 or 4), roughness (H, W), hit_distance (H, W): the optional split
+        signal, read by method "detail" only: the part of color that left the first surface
+        through its glossy lobe (albedo is then the diffuse albedo), its roughness in [0, 1]
+        (sqrt of GGX alpha; needed with specular), and the world distance its specular ray
+        travelled to a hit (0: unknown; optional).
         out: an (H, W, 3 or 4) float32 or float16 array to write (4: alpha 1; give out[..., :3]
         to keep its alpha).
 
@@ -534,6 +549,16 @@ class Denoiser:
             confidence = _image("confidence", confidence, size, (1,), like)
             if confidence.dtype.kind != "f":
                 confidence = confidence.astype(np.float32)
+        if specular is not None:
+            specular = _image("specular", specular, size, (3, 4), like)
+        if roughness is not None:
+            roughness = _image("roughness", roughness, size, (1,), like)
+            if roughness.dtype.kind != "f":
+                roughness = roughness.astype(np.float32)
+        if hit_distance is not None:
+            hit_distance = _image("hit_distance", hit_distance, size, (1,), like)
+            if hit_distance.dtype.kind != "f":
+                hit_distance = hit_distance.astype(np.float32)
         if object_count is None:
             object_count = _object_count_of(ids)
         if matrices is None and motion is None:
@@ -553,6 +578,9 @@ class Denoiser:
             "albedo": (albedo, 0 if albedo is None else albedo.shape[2]),
             "motion": (motion, 0 if motion is None else motion.shape[2]),
             "confidence": (confidence, 1),
+            "specular": (specular, 0 if specular is None else specular.shape[2]),
+            "roughness": (roughness, 1),
+            "hit_distance": (hit_distance, 1),
         }
         with self._exclusive():
             if kind != self._depth_kind:

@@ -251,11 +251,15 @@ enum ImageSlot {
     kAlbedo,
     kMotion,
     kConfidence,
+    kSpecular,
+    kRoughness,
+    kHitDistance,
     kOutput,
     kSlots
 };
-const char* const kImageNames[kSlots] = {"color",  "normal", "position",   "depth", "ids",
-                                         "albedo", "motion", "confidence", "output"};
+const char* const kImageNames[kSlots] = {"color",    "normal",    "position",     "depth",
+                                         "ids",      "albedo",    "motion",       "confidence",
+                                         "specular", "roughness", "hit_distance", "output"};
 
 struct BoundImage {
     const void* data = nullptr;
@@ -289,7 +293,7 @@ void checkFormat(ImageSlot slot, RTDFormat format) {
              fmt::format("{}: format {} is not an RTDFormat", kImageNames[slot], int(format)));
     int lowest = 3, highest = 4;
     const char* expected = "3 or 4 float or half values (RTD_FORMAT_FLOAT3/4, HALF3/4)";
-    if (slot == kDepth || slot == kConfidence) {
+    if (slot == kDepth || slot == kConfidence || slot == kRoughness || slot == kHitDistance) {
         lowest = highest = 1;
         expected = "1 float or half value (RTD_FORMAT_FLOAT, HALF)";
     } else if (slot == kIds) {
@@ -408,6 +412,9 @@ void execute(RTDDenoiser d) {
     view.albedo = viewOf(d->images[kAlbedo]);
     view.motion = viewOf(d->images[kMotion]);
     view.confidence = viewOf(d->images[kConfidence]);
+    view.specular = viewOf(d->images[kSpecular]);
+    view.roughness = viewOf(d->images[kRoughness]);
+    view.hitDistance = viewOf(d->images[kHitDistance]);
     view.objectCount = d->objectCount;
     // The single-frame methods never reproject: without matrices, identities stand for them.
     if (!d->hasMatrices && !motion)
@@ -714,7 +721,8 @@ RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat
         if (slot == kSlots)
             fail(RTD_ERROR_INVALID_ARGUMENT,
                  fmt::format("unknown image '{}' (images: color, normal, position, depth, ids, "
-                             "albedo, motion, confidence, output)",
+                             "albedo, motion, confidence, specular, roughness, hit_distance, "
+                             "output)",
                              name));
         if (!ptr) {  // unset
             d->images[slot] = BoundImage{};

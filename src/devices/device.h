@@ -77,6 +77,8 @@ class Device {
     virtual void run(const SvgfAtrousIterationStep& step) = 0;
     virtual void run(const DetailTemporalStageStep& step) = 0;
     virtual void run(const DetailClampStep& step) = 0;
+    virtual void run(const DetailSplitStep& step) = 0;
+    virtual void run(const AddToOutputStep& step) = 0;
     virtual void run(const ModulateStep& step) = 0;
     virtual void run(const ConvertStep& step) = 0;
 

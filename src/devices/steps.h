@@ -31,6 +31,8 @@ enum class StepKind {
     SvgfAtrousIteration,
     DetailTemporalStage,
     DetailClamp,
+    DetailSplit,
+    AddToOutput,
     Modulate,
 };
 
@@ -110,9 +112,23 @@ struct SvgfAtrousIterationStep {
 
 // The detail method's reprojection (with the 3x3 search) and accumulation of both histories.
 // reproject.history and accumulate.history are the device's to fill (working planes).
+// specular (hasSpecular): the specular signal's, whose history is then followed by the
+// reflection or capped (DetailSpecularReproject) before the accumulation.
 struct DetailTemporalStageStep {
     DetailReprojectKernel reproject;
     DetailAccumulateKernel accumulate;
+    DetailSpecularReprojectKernel specular = {};
+    int hasSpecular = 0;
+};
+
+// The ingest's image into the diffuse and specular signals (frames with a specular input).
+struct DetailSplitStep {
+    DetailSplitKernel split;
+};
+
+// The filtered specular signal added to the output.
+struct AddToOutputStep {
+    AddToOutputKernel add;
 };
 
 // The window sums of the fast history and of the current luminance, the clamp and anti-lag,
@@ -158,6 +174,11 @@ void runDetailTemporalStep(const DetailTemporalStageStep& s, PlaneSet history, L
     launch(DetailReprojectSearchKernel{r.g, r.previous, r.objects, r.objectCount, r.derivatives,
                                        r.test, r.previousSlow, r.previousFast, r.previousMoments,
                                        r.previousLength, r.history, r.validity, r.hasHistory});
+    if (s.hasSpecular) {
+        DetailSpecularReprojectKernel specular = s.specular;
+        specular.history = history;
+        launch(specular);
+    }
     const DetailAccumulateKernel& a = s.accumulate;
     if (a.confidence.data)
         launch(DetailAccumulateConfidenceKernel{a.g, a.radiance, history, a.validity, a.confidence,

@@ -27,6 +27,10 @@ const std::vector<std::vector<std::string>> kId = {{"Y", "R", "ID.Y", "id.Y"}};
 // History confidence: 1 channel; of an RGB file its R (a grey image holds it in every channel).
 const std::vector<std::vector<std::string>> kConfidence = {
     {"Y", "R", "confidence.Y", "confidence.R", "A"}};
+// The split signal's scalars (specular itself is RGB): 1 channel, Y or an RGB file's R.
+const std::vector<std::vector<std::string>> kRoughness = {{"Y", "R", "roughness.Y", "roughness.R"}};
+const std::vector<std::vector<std::string>> kHitDistance = {
+    {"Y", "R", "hit_distance.Y", "hit_distance.R"}};
 
 // IDs are stored as floats; anything further than this from an integer is a broken file.
 constexpr float kIdTolerance = 1e-3f;
@@ -215,6 +219,13 @@ Frame Sequence::readFrame(int index) const {
     if (hasEntry(albedoFile)) frame.albedo = readChecked(albedoFile, kRgb);
     const std::filesystem::path confidenceFile = path("confidence", ".exr");
     if (hasEntry(confidenceFile)) frame.confidence = readChecked(confidenceFile, kConfidence);
+    // The split signal (the Denoiser checks that roughness and hit distance come with specular).
+    const std::filesystem::path specularFile = path("specular", ".exr");
+    if (hasEntry(specularFile)) frame.specular = readChecked(specularFile, kRgb);
+    const std::filesystem::path roughnessFile = path("roughness", ".exr");
+    if (hasEntry(roughnessFile)) frame.roughness = readChecked(roughnessFile, kRoughness);
+    const std::filesystem::path hitDistanceFile = path("hit_distance", ".exr");
+    if (hasEntry(hitDistanceFile)) frame.hitDistance = readChecked(hitDistanceFile, kHitDistance);
     return frame;
 }
 
@@ -258,6 +269,10 @@ std::vector<ExrSize> Sequence::checkFrames(int count) const {
         if (hasEntry(path("albedo", ".exr"))) checkSize(path("albedo", ".exr"), kRgb);
         if (hasEntry(path("confidence", ".exr")))
             checkSize(path("confidence", ".exr"), kConfidence);
+        if (hasEntry(path("specular", ".exr"))) checkSize(path("specular", ".exr"), kRgb);
+        if (hasEntry(path("roughness", ".exr"))) checkSize(path("roughness", ".exr"), kRoughness);
+        if (hasEntry(path("hit_distance", ".exr")))
+            checkSize(path("hit_distance", ".exr"), kHitDistance);
         sizes.push_back(beauty);
     }
     return sizes;
@@ -279,6 +294,9 @@ void writeFrame(const std::filesystem::path& folder, int index, const Frame& fra
     writeExr(path("ID", ".exr"), ids);
     if (frame.albedo) writeExr(path("albedo", ".exr"), *frame.albedo);
     if (frame.confidence) writeExr(path("confidence", ".exr"), *frame.confidence);
+    if (frame.specular) writeExr(path("specular", ".exr"), *frame.specular);
+    if (frame.roughness) writeExr(path("roughness", ".exr"), *frame.roughness);
+    if (frame.hitDistance) writeExr(path("hit_distance", ".exr"), *frame.hitDistance);
     writeMatrixFile(path("matrix", ".mat"),
                     MatrixFile{frame.objectToWorld, frame.worldToCamera, frame.worldToScreen});
 }

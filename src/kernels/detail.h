@@ -24,6 +24,36 @@ struct DetailHistorySample {
     float mean = 0.0f, variance = 0.0f, length = 0.0f;
 };
 
+// The previous frame's histories, weighted over the taps (the moments' variance includes the
+// spread of the taps' means).
+template <int kTaps>
+RTD_HOST_DEVICE RTD_INLINE DetailHistorySample gatherDetailHistory(const HistoryTaps<kTaps>& taps,
+                                                                   const Planes3& previousSlow,
+                                                                   const Planes3& previousFast,
+                                                                   const PlaneSet& previousMoments,
+                                                                   const float* previousLength) {
+    float sr[kTaps], sg[kTaps], sb[kTaps], fr[kTaps], fg[kTaps], fb[kTaps];
+    float means[kTaps], variances[kTaps], lengths[kTaps];
+    loadTaps(previousSlow, taps, sr, sg, sb);
+    loadTaps(previousFast, taps, fr, fg, fb);
+    loadTaps(previousMoments.data, taps, means);
+    loadTaps(&previousMoments.at(1, 0), taps, variances);
+    loadTaps(previousLength, taps, lengths);
+    DetailHistorySample s;
+    RTD_UNROLL
+    for (int t = 0; t < kTaps; ++t) {
+        float w = taps.weight[t];
+        s.slow += make3(sr[t], sg[t], sb[t]) * w;
+        s.fast += make3(fr[t], fg[t], fb[t]) * w;
+        s.mean += means[t] * w;
+        s.length += lengths[t] * w;
+    }
+    RTD_UNROLL
+    for (int t = 0; t < kTaps; ++t)
+        s.variance += (variances[t] + square(means[t] - s.mean)) * taps.weight[t];
+    return s;
+}
+
 // The previous frame's slow and fast colour, moments and history length at each pixel's
 // back-projected position (0 where the history test fails). As SvgfReproject: Search3x3 = false
 // runs on every pixel with the bilinear taps, Search3x3 = true then redoes the object pixels
@@ -76,27 +106,8 @@ struct DetailReproject {
         auto taps = findHistory<Search3x3, KnownId>(g, i, previous, objects, objectCount,
                                                     slopesAt(derivatives, i), test, hasHistory, id);
         code = taps.code;
-        constexpr int kTaps = decltype(taps)::kCount;
-        float sr[kTaps], sg[kTaps], sb[kTaps], fr[kTaps], fg[kTaps], fb[kTaps];
-        float means[kTaps], variances[kTaps], lengths[kTaps];
-        loadTaps(previousSlow, taps, sr, sg, sb);
-        loadTaps(previousFast, taps, fr, fg, fb);
-        loadTaps(previousMoments.data, taps, means);
-        loadTaps(&previousMoments.at(1, 0), taps, variances);
-        loadTaps(previousLength, taps, lengths);
-        DetailHistorySample s;
-        RTD_UNROLL
-        for (int t = 0; t < kTaps; ++t) {
-            float w = taps.weight[t];
-            s.slow += make3(sr[t], sg[t], sb[t]) * w;
-            s.fast += make3(fr[t], fg[t], fb[t]) * w;
-            s.mean += means[t] * w;
-            s.length += lengths[t] * w;
-        }
-        RTD_UNROLL
-        for (int t = 0; t < kTaps; ++t)
-            s.variance += (variances[t] + square(means[t] - s.mean)) * taps.weight[t];
-        return s;
+        return gatherDetailHistory(taps, previousSlow, previousFast, previousMoments,
+                                   previousLength);
     }
 };
 using DetailReprojectKernel = DetailReproject<false>;
@@ -228,6 +239,135 @@ struct DetailScaleKernel {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = layout.index(x, y);
         fast.store(i, fast.load(i) * lagScale[i]);
+    }
+};
+
+// ---- the split signal (FrameBinding::specular) ----
+
+// A finite, non-negative value of the caller's (NaN, Inf and negatives read as 0).
+RTD_HOST_DEVICE RTD_INLINE float finiteNonNegative(float v) {
+    return v >= 0.0f && v < 3.0e38f ? v : 0.0f;
+}
+
+// The ingest's demodulated beauty into its two signals: the diffuse one (beauty - specular,
+// demodulated: noisy - specular / albedo, written in place) and the specular one (not
+// demodulated: its colour is the lobe's, not the texture's).
+struct DetailSplitKernel {
+    Layout layout;
+    Planes3 noisy;   // in: beauty / albedo; out: the diffuse signal
+    Planes3 albedo;  // the ingest's factor (floored at its epsilon, 1 on background)
+    InputSpan specular;
+    Planes3 specularOut;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        PixelIndex i = layout.index(x, y);
+        Float3 s = make3(finiteNonNegative(specular.load(x, y, 0)),
+                         finiteNonNegative(specular.load(x, y, 1)),
+                         finiteNonNegative(specular.load(x, y, 2)));
+        Float3 n = noisy.load(i), a = albedo.load(i);
+        noisy.store(i, make3(maxf(n.x - s.x / a.x, 0.0f), maxf(n.y - s.y / a.y, 0.0f),
+                             maxf(n.z - s.z / a.z, 0.0f)));
+        specularOut.store(i, s);
+    }
+};
+
+// The specular signal's history, after DetailReproject has followed the surface (NVIDIA NRD's
+// specular reprojection, simplified): where the caller gives the specular ray's hit distance
+// (and matrices), the reflection is followed instead: its virtual point, the hit distance
+// behind the surface along the view ray, is projected into the previous frame with the
+// object's matrix, and the history taken there where the previous frame shows the same object
+// with a like normal ("virtual motion", exact for a planar mirror). Elsewhere the surface's
+// history stays, its length capped by the parallax: a reflection drifts over its surface as the
+// view moves, the less so the rougher the lobe.
+struct DetailSpecularReprojectKernel {
+    GBufferView g;
+    PreviousGeometry previous;
+    const ObjectReprojection* objects;
+    int objectCount;
+    Planes3 previousSlow, previousFast;
+    PlaneSet previousMoments;
+    const float* previousLength;
+    PlaneSet history;  // in: DetailReproject's; out: the reflection's where it holds, capped
+    std::uint8_t* validity;
+    InputSpan roughness, hitDistance;  // hitDistance data null: none
+    Float3 cameraPosition;
+    float maxHistory;
+    int hasHistory;
+    // Surface history frames kept per pixel of parallax at roughness 0 (x (1 - r)^2).
+    static constexpr float kParallaxFrames = 8.0f;
+    static constexpr float kNormalAgreement = 0.9f;  // cosine between now and then
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const Layout& L = g.layout;
+        PixelIndex i = L.index(x, y);
+        std::int32_t id = g.objectId[i];
+        if (id < 0 || id >= objectCount || !hasHistory) return;
+        const ObjectReprojection& object = objects[id];
+        if (!object.valid) return;
+        float r = roughness.load(x, y, 0);
+        r = r >= 0.0f ? minf(r, 1.0f) : (r < 0.0f ? 0.0f : 1.0f);  // NaN: rough
+        Float3 position = g.position.load(i);
+        // Where the surface was (the parallax is measured against it).
+        Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
+        float surfaceX = s.x / (s.w > 0.0f ? s.w : 1.0f) - 0.5f;
+        float surfaceY = s.y / (s.w > 0.0f ? s.w : 1.0f) - 0.5f;
+        float distance = hitDistance.data ? finiteNonNegative(hitDistance.load(x, y, 0)) : 0.0f;
+        bool followed = false;
+        float parallax = std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
+        if (distance > 0.0f && !previous.fromMotion) {
+            Float3 view = normalize(position - cameraPosition);
+            Float4 v = transformPoint(object.currentWorldToPreviousScreen, position + view * distance);
+            float vx = v.x / (v.w > 0.0f ? v.w : 1.0f) - 0.5f;
+            float vy = v.y / (v.w > 0.0f ? v.w : 1.0f) - 0.5f;
+            bool onScreen = v.w > 0.0f && vx > -1.0f && vx < float(L.width) && vy > -1.0f &&
+                            vy < float(L.height);
+            if (onScreen) {
+                Float3 expectedNormal = normalize(
+                    transformVector(object.currentWorldToPreviousWorld, g.normal.load(i)));
+                float fx = std::floor(vx), fy = std::floor(vy);
+                int x0 = int(fx), y0 = int(fy);
+                float ax = vx - fx, ay = vy - fy;
+                HistoryTaps<4> taps;
+                float total = 0.0f;
+                RTD_UNROLL
+                for (int t = 0; t < 4; ++t) {
+                    PixelIndex j = L.index(x0 + (t & 1), y0 + (t >> 1));
+                    Float3 n = previous.normal.load(j);
+                    bool ok = previous.objectId[j] == id && dot(n, expectedNormal) > kNormalAgreement;
+                    float w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
+                    taps.index[t] = j;
+                    taps.weight[t] = ok ? w : 0.0f;
+                    total += taps.weight[t];
+                }
+                if (total > 1e-3f) {
+                    RTD_UNROLL
+                    for (int t = 0; t < 4; ++t) taps.weight[t] /= total;
+                    DetailHistorySample h = gatherDetailHistory(
+                        taps, previousSlow, previousFast, previousMoments, previousLength);
+                    DetailReproject<false>::store(history, i, h);
+                    validity[i] = kReprojectionValid;
+                    followed = true;
+                }
+            }
+        }
+        if (!followed) {
+            float cap = maxHistory / (1.0f + kParallaxFrames * parallax * square(1.0f - r));
+            history.at(8, i) = minf(history.at(8, i), maxf(cap - 1.0f, 0.0f));
+        }
+    }
+};
+
+// The filtered specular signal added to the output (where the diffuse one was written).
+struct AddToOutputKernel {
+    Layout layout;
+    Planes3 add;
+    float* rgbOut;  // interleaved, 3 floats per pixel
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        PixelIndex s = PixelIndex(y) * layout.width + x;
+        Float3 a = add.load(layout.index(x, y));
+        rgbOut[3 * s] += a.x;
+        rgbOut[3 * s + 1] += a.y;
+        rgbOut[3 * s + 2] += a.z;
     }
 };
 

@@ -10,50 +10,61 @@
 //          -> detail-atrous0 .. detail-atrous{iterations-1} (the last one modulated)
 //   detail-temporal: reprojection of both histories (3x3 search where the bilinear taps fail),
 //   accumulation (scaled by the caller's confidence where given)
+//
+// With the split signal (a specular input, NVIDIA NRD's diffuse/specular), the two are filtered
+// apart, each with its own histories, and added at the end:
+//   ingest -> detail-split -> [outlier, outlier-specular] -> geometry
+//          -> diffuse:  detail-temporal .. detail-atrous{last} (modulated, into the output)
+//          -> specular: detail-specular-temporal (the reflection's history where the hit
+//             distance is given, else the surface's, capped by parallax and roughness)
+//             .. detail-specular-atrous{last} -> add-specular
+#include <cctype>
+#include <string>
+
 #include "methods/method.h"
 
 namespace rtd {
 
-FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
-    const DetailSettings& d = settings.detail;
-    FrameImages f = declareIngest(p, settings);
-    ResourceId in = declareDespeckle(p, settings, f);
+namespace {
 
-    ResourceId derivatives = p.declare(floatImage("derivatives", 3));  // dz/dx, dz/dy, fwidth(n)
-    ResourceId slow = p.declare(floatImage("slowHistory", 3, Lifetime::History));
-    ResourceId fast = p.declare(floatImage("fastHistory", 3, Lifetime::History));
-    ResourceId moments = p.declare(floatImage("moments", 2, Lifetime::History));
-    ResourceId length = p.declare({.name = "historyLength",
+// What both signals' passes use in turn (frame lifetime).
+struct SharedImages {
+    ResourceId derivatives, variance, filterA, filterB, validity, lagScale, currentSums;
+};
+
+// One signal's histories and passes, from its despeckled image `in` to its filtered image (the
+// output, times the albedo, when toOutput; else returned). specular: the split signal's
+// specular part, with its own reprojection (DetailSpecularReproject).
+ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f,
+                         const SharedImages& shared, ResourceId in, bool specular, bool toOutput) {
+    const DetailSettings& d = settings.detail;
+    const std::string prefix = specular ? "specular" : "";
+    auto named = [&](const std::string& name) {
+        return specular ? prefix + char(std::toupper(name[0])) + name.substr(1) : name;
+    };
+    const std::string passPrefix = specular ? "detail-specular-" : "detail-";
+    ResourceId slow = p.declare(floatImage(named("slowHistory"), 3, Lifetime::History));
+    ResourceId fast = p.declare(floatImage(named("fastHistory"), 3, Lifetime::History));
+    ResourceId moments = p.declare(floatImage(named("moments"), 2, Lifetime::History));
+    ResourceId length = p.declare({.name = named("historyLength"),
                                    .lifetime = Lifetime::History,
-                                   .hasDebugView = true,
+                                   .hasDebugView = !specular,
                                    .debugView = DebugView::HistoryLength,
                                    .debugDivisor = float(d.maxHistory)});
-    // rgb + variance, the A-Trous input.
-    ResourceId variance = p.declare({.name = "illumination+variance",
-                                     .planes = 4,
-                                     .hasDebugView = true,
-                                     .debugView = DebugView::Variance,
-                                     .debugPlane = 3,
-                                     .debugShow = DebugShow::StandardDeviation});
-    ResourceId filterA = p.declare(floatImage("filterA", 4));
-    ResourceId filterB = p.declare(floatImage("filterB", 4));
-    ResourceId validity = declareValidity(p);
+    const ResourceId derivatives = shared.derivatives, variance = shared.variance;
+    const ResourceId validity = shared.validity;
     const SvgfTerms terms{d.sigmaDepth, d.sigmaNormal, d.sigmaLuminance};
 
-    p.addPass("geometry", StepKind::Geometry, gbufferReads(f), {derivatives}, 2,
-              [f, derivatives](const PassContext& c) {
-                  c.device().run(GeometryStep{{gbuffer(c, f), c.planeSet(derivatives)}});
-              });
-
     const HistoryTest test = historyTest(settings.history);
-    p.addPass("detail-temporal", StepKind::DetailTemporalStage,
+    p.addPass(passPrefix + "temporal", StepKind::DetailTemporalStage,
               with(reprojectionReads(p, f), {derivatives, previous(slow), previous(fast),
                                              previous(moments), previous(length), in}),
               {slow, fast, moments, length, validity}, 2, [=](const PassContext& c) {
                   GBufferView g = gbuffer(c, f);
                   const FrameBinding& frame = c.frame();
+                  const PreviousGeometry before = previousGeometry(c, f);
                   DetailReprojectKernel reproject{g,
-                                                  previousGeometry(c, f),
+                                                  before,
                                                   c.objects(),
                                                   frame.objectCount,
                                                   c.planeSet(derivatives),
@@ -77,16 +88,34 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
                                                     float(d.maxHistory),
                                                     float(d.fastHistory),
                                                     d.momentsAlpha};
-                  c.device().run(DetailTemporalStageStep{reproject, accumulate});
+                  DetailTemporalStageStep step{reproject, accumulate};
+                  if (specular) {
+                      step.hasSpecular = 1;
+                      step.specular = {g,
+                                       before,
+                                       c.objects(),
+                                       frame.objectCount,
+                                       c.planes(previous(slow)),
+                                       c.planes(previous(fast)),
+                                       c.planeSet(previous(moments)),
+                                       c.floats(previous(length)),
+                                       {},
+                                       c.bytes(validity),
+                                       frame.roughness,
+                                       frame.hitDistance,
+                                       frame.cameraPosition,
+                                       float(d.maxHistory),
+                                       frame.hasHistory};
+                  }
+                  c.device().run(step);
               });
 
     // The anti-lag runs with a caller's confidence too: the renderer's gradients (A-SVGF) take
     // most of a switched light's change, not all. The fast history's window sums in windowSums
     // (free after the firefly removal).
-    ResourceId lagScale = p.declare(floatImage("lagScale", 1));
-    ResourceId currentSums = p.declare(floatImage("currentSums", 3));
     constexpr int kWindow = DetailClampKernel::kRadius;
-    p.addPass("detail-clamp", StepKind::DetailClamp,
+    const ResourceId lagScale = shared.lagScale, currentSums = shared.currentSums;
+    p.addPass(passPrefix + "clamp", StepKind::DetailClamp,
               with(gbufferReads(f), {in, fast, slow, moments, length}),
               {fast, slow, length, variance, lagScale, f.windowSums, currentSums}, kNarrowWindow,
               [=](const PassContext& c) {
@@ -106,7 +135,7 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
     SvgfTerms wide = terms;
     wide.sigmaLuminance = 10.0f;
     constexpr float kShortHistory = 4.0f;  // frames: below, estimate spatially
-    p.addPass("detail-variance", StepKind::SvgfVariance,
+    p.addPass(passPrefix + "variance", StepKind::SvgfVariance,
               with(gbufferReads(f), {slow, moments, length, derivatives, variance}), {variance},
               kSvgfWindowRadius, [=](const PassContext& c) {
                   c.device().run(SvgfVarianceStep{
@@ -114,8 +143,59 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings) {
                        c.floats(length), c.planeSet(variance), wide, kShortHistory}});
               });
 
-    declareGuidedIterations(p, f, "detail-atrous", derivatives, variance, filterA, filterB,
-                            d.iterations, terms);
+    return declareGuidedIterations(p, f, passPrefix + "atrous", derivatives, variance,
+                                   shared.filterA, shared.filterB, d.iterations, terms, -1, {},
+                                   toOutput);
+}
+
+}  // namespace
+
+FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
+                          const MethodInputs& inputs) {
+    FrameImages f = declareIngest(p, settings);
+    ResourceId specularNoisy;
+    if (inputs.specular) {
+        specularNoisy = p.declare(floatImage("specularNoisy", 3));
+        p.addPass("detail-split", StepKind::DetailSplit, {p.frame(), f.noisy, f.albedo},
+                  {f.noisy, specularNoisy}, 0, [f, specularNoisy](const PassContext& c) {
+                      c.device().run(DetailSplitStep{{c.layout(), c.planes(f.noisy),
+                                                      c.planes(f.albedo), c.frame().specular,
+                                                      c.planes(specularNoisy)}});
+                  });
+    }
+    ResourceId in = declareDespeckle(p, settings, f);
+
+    SharedImages shared;
+    shared.derivatives = p.declare(floatImage("derivatives", 3));  // dz/dx, dz/dy, fwidth(n)
+    // rgb + variance, the A-Trous input.
+    shared.variance = p.declare({.name = "illumination+variance",
+                                 .planes = 4,
+                                 .hasDebugView = true,
+                                 .debugView = DebugView::Variance,
+                                 .debugPlane = 3,
+                                 .debugShow = DebugShow::StandardDeviation});
+    shared.filterA = p.declare(floatImage("filterA", 4));
+    shared.filterB = p.declare(floatImage("filterB", 4));
+    shared.validity = declareValidity(p);
+    shared.lagScale = p.declare(floatImage("lagScale", 1));
+    shared.currentSums = p.declare(floatImage("currentSums", 3));
+
+    const ResourceId derivatives = shared.derivatives;
+    p.addPass("geometry", StepKind::Geometry, gbufferReads(f), {derivatives}, 2,
+              [f, derivatives](const PassContext& c) {
+                  c.device().run(GeometryStep{{gbuffer(c, f), c.planeSet(derivatives)}});
+              });
+    declareSignal(p, settings, f, shared, in, false, true);
+    if (!inputs.specular) return f;
+
+    FrameImages specularImages = f;
+    specularImages.noisy = specularNoisy;
+    ResourceId specularIn = declareDespeckle(p, settings, specularImages, false, "specular");
+    ResourceId filtered = declareSignal(p, settings, f, shared, specularIn, true, false);
+    p.addPass("add-specular", StepKind::AddToOutput, {filtered, p.output()}, {p.output()}, 0,
+              [filtered](const PassContext& c) {
+                  c.device().run(AddToOutputStep{{c.layout(), c.planes(filtered), c.output()}});
+              });
     return f;
 }
 

@@ -22,14 +22,21 @@ struct FrameImages {
     ResourceId motion;      // temporal methods, 3 planes: MotionIngestKernel's (frames with motion)
 };
 
+// What the frames give beyond the required buffers, where it changes the passes.
+struct MethodInputs {
+    bool specular = false;  // the split signal (FrameBinding::specular): detail filters it apart
+};
+
 // Declares `settings.method` into `pipeline`; returns the ingest's images.
-FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings);
+FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings,
+                          const MethodInputs& inputs = {});
 
 FrameImages declareJbf(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareAtrous(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareTemporal(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareSvgf(Pipeline& pipeline, const DenoiserSettings& settings);
-FrameImages declareDetail(Pipeline& pipeline, const DenoiserSettings& settings);
+FrameImages declareDetail(Pipeline& pipeline, const DenoiserSettings& settings,
+                          const MethodInputs& inputs);
 
 // ---- shared passes ----
 
@@ -50,9 +57,10 @@ HistoryTest historyTest(const HistorySettings& settings);
 
 // The "outlier" pass where firefly removal is on; returns the image the filters read (the
 // despeckled one, or the noisy one). clampSums: it also leaves the colour row sums of its result
-// over SVGF's clamp window in windowSums.
+// over SVGF's clamp window in windowSums. signal: a suffix of its names (a second signal's).
 ResourceId declareDespeckle(Pipeline& pipeline, const DenoiserSettings& settings,
-                            const FrameImages& images, bool clampSums = false);
+                            const FrameImages& images, bool clampSums = false,
+                            const std::string& signal = "");
 // The spatial filter of `in` into `out`; modulateLast: its last A-Trous level writes the output
 // (times the albedo) instead. `scratch`: the A-Trous levels' second image.
 void declareSpatialFilter(Pipeline& pipeline, const DenoiserSettings& settings,
@@ -62,11 +70,13 @@ void declareSpatialFilter(Pipeline& pipeline, const DenoiserSettings& settings,
 // prefix0, prefix1, ...: they ping-pong between filterA and filterB, iteration
 // `feedbackIteration` (-1: none) writing `feedback` instead (and the next one reading it from
 // there); the last one writes the output times the albedo, unless it is the feedback one: then
-// a modulate pass follows.
-void declareGuidedIterations(Pipeline& pipeline, const FrameImages& images,
-                             const std::string& prefix, ResourceId derivatives, ResourceId in,
-                             ResourceId filterA, ResourceId filterB, int iterations,
-                             SvgfTerms terms, int feedbackIteration = -1, ResourceId feedback = {});
+// a modulate pass follows. toOutput false: the last one writes filterA or filterB like the
+// others. Returns what the last one wrote.
+ResourceId declareGuidedIterations(Pipeline& pipeline, const FrameImages& images,
+                                   const std::string& prefix, ResourceId derivatives,
+                                   ResourceId in, ResourceId filterA, ResourceId filterB,
+                                   int iterations, SvgfTerms terms, int feedbackIteration = -1,
+                                   ResourceId feedback = {}, bool toOutput = true);
 // "modulate": the albedo multiplied back into `source` (its first three planes), written into
 // the output.
 void declareModulate(Pipeline& pipeline, const FrameImages& images, ResourceId source);

@@ -66,6 +66,10 @@ struct FrameBinding {
     // The caller's history confidence, 1 channel in [0, 1] (data null: none): 0 where the
     // lighting changed and the history should be dropped (NRD's IN_DIFF_CONFIDENCE).
     InputSpan confidence;
+    InputSpan specular;     // the caller's specular part of beauty, RGB (data null: none)
+    InputSpan roughness;    // with specular: 1 channel in [0, 1] (sqrt of GGX alpha)
+    InputSpan hitDistance;  // with specular, optional: specular hit distance (0: unknown)
+    Float3 cameraPosition;  // world space (from worldToCamera), where the views start
     int objectCount = 0;
     const ObjectReprojection* objects = nullptr;  // the matrices, one per object
     int hasHistory = 0;

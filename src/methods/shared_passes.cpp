@@ -23,7 +23,8 @@ int windowReach(int radius) {
 
 }  // namespace
 
-FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings) {
+FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings,
+                          const MethodInputs& inputs) {
     switch (settings.method) {
         case Method::Jbf:
             return declareJbf(pipeline, settings);
@@ -34,7 +35,7 @@ FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings) 
         case Method::Svgf:
             return declareSvgf(pipeline, settings);
         case Method::Detail:
-            return declareDetail(pipeline, settings);
+            return declareDetail(pipeline, settings, inputs);
     }
     throw Error(ErrorCode::InvalidArgument, "settings: unknown method");
 }
@@ -155,13 +156,14 @@ FrameImages declareIngest(Pipeline& p, const DenoiserSettings& settings) {
 }
 
 ResourceId declareDespeckle(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f,
-                            bool clampSums) {
+                            bool clampSums, const std::string& signal) {
     if (!settings.outlier.enabled) return f.noisy;
-    ResourceId despeckled = p.declare(floatImage("despeckled", 3));
+    const std::string suffix = signal.empty() ? "" : "-" + signal;
+    ResourceId despeckled = p.declare(floatImage("despeckled" + suffix, 3));
     const int radius = settings.outlier.radius;
     const float k = settings.outlier.k;
     p.addPass(
-        "outlier", StepKind::Despeckle, with(gbufferReads(f), {f.noisy}),
+        "outlier" + suffix, StepKind::Despeckle, with(gbufferReads(f), {f.noisy}),
         {despeckled, f.windowSums},
         clampSums ? std::max(windowReach(radius), kSvgfWindowRadius) : windowReach(radius),
         [f, despeckled, radius, k, clampSums](const PassContext& c) {
@@ -211,15 +213,15 @@ void declareSpatialFilter(Pipeline& p, const DenoiserSettings& settings, const F
     }
 }
 
-void declareGuidedIterations(Pipeline& p, const FrameImages& f, const std::string& prefix,
-                             ResourceId derivatives, ResourceId in, ResourceId filterA,
-                             ResourceId filterB, int iterations, SvgfTerms terms,
-                             int feedbackIteration, ResourceId feedback) {
+ResourceId declareGuidedIterations(Pipeline& p, const FrameImages& f, const std::string& prefix,
+                                   ResourceId derivatives, ResourceId in, ResourceId filterA,
+                                   ResourceId filterB, int iterations, SvgfTerms terms,
+                                   int feedbackIteration, ResourceId feedback, bool toOutput) {
     ResourceId src = in;
     for (int it = 0; it < iterations; ++it) {
         const bool isFeedback = it == feedbackIteration;
         const bool last = it == iterations - 1;
-        const bool modulated = last && !isFeedback;
+        const bool modulated = last && !isFeedback && toOutput;
         const ResourceId dst =
             isFeedback ? feedback : (src.index == filterA.index ? filterB : filterA);
         const int stride = 1 << it;
@@ -238,9 +240,10 @@ void declareGuidedIterations(Pipeline& p, const FrameImages& f, const std::strin
                       }
                       c.device().run(SvgfAtrousIterationStep{iteration, modulated});
                   });
-        if (last && !modulated) declareModulate(p, f, dst);
+        if (last && !modulated && toOutput) declareModulate(p, f, dst);
         src = dst;
     }
+    return src;
 }
 
 void declareModulate(Pipeline& p, const FrameImages& f, ResourceId source) {

@@ -232,6 +232,10 @@ struct Bsdf {
         float c = dot(reflected, wi);
         return c > 0.0f ? std::pow(c, exponent) : 0.0f;
     }
+    // The glossy lobe's part of evaluate() (the same expression), for the split signal.
+    float evaluateSpecular(Vec3 wi) const {
+        return specular > 0.0f ? specular * (exponent + 2.0f) / (2.0f * kPi) * lobe(wi) : 0.0f;
+    }
     Vec3 evaluate(Vec3 wi) const {
         Vec3 f = diffuse * (1.0f / kPi);
         if (specular > 0.0f) f += Vec3(specular * (exponent + 2.0f) / (2.0f * kPi) * lobe(wi));
@@ -534,13 +538,27 @@ class CompiledScene {
     std::vector<Light> lights_;
 };
 
-Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng) {
+// One camera path. With `specular`, it also receives the part of the radiance that left the
+// first surface (depth 0) through its glossy lobe: at depth 0 next-event estimation adds the
+// glossy term of the BSDF alone (same light sample, same MIS weight), and every later
+// contribution is carried by specularThroughput, the throughput with the first vertex's BSDF
+// replaced by its glossy lobe (f_specular cos / pdf at the sampled direction). Emission seen at
+// depth 0 and background seen by the camera count as diffuse. The split only adds arithmetic on
+// its own values: the random numbers and the radiance are those without it. (One function with a
+// run-time switch, not a template: a second instantiation changes what the compiler inlines,
+// and with contraction the beauty's last bits.)
+Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng,
+              Vec3* specular = nullptr) {
     Vec3 result(0.0f), throughput(1.0f);
+    Vec3 specularResult(0.0f), specularThroughput(0.0f);
+    const bool split = specular != nullptr;
     float previousPdf = 0.0f;  // solid-angle pdf of the BSDF sample that made `ray`
     for (int depth = 0; depth < maxDepth; ++depth) {
         Hit hit = scene.closest(ray);
         if (hit.object < 0) {
             result += throughput * scene.scene().background;
+            if (split)
+                if (depth > 0) specularResult += specularThroughput * scene.scene().background;
             break;
         }
         Surface s = scene.surface(ray, hit);
@@ -557,6 +575,8 @@ Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng) {
                 weight = powerHeuristic(
                     previousPdf, scene.lightPdf(light, ray.origin, ray.direction, hit.t, s.normal));
             result += throughput * m.emission * weight;
+            if (split)
+                if (depth > 0) specularResult += specularThroughput * m.emission * weight;
         }
         if (depth + 1 >= maxDepth) break;  // the next vertex would be past the limit
 
@@ -574,6 +594,15 @@ Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng) {
                     float weight = powerHeuristic(ls.pdf, bsdf.pdf(ls.direction));
                     result += throughput * bsdf.evaluate(ls.direction) * ls.emission *
                               (cosSurface * weight / ls.pdf);
+                    if (split) {
+                        if (depth == 0)
+                            specularResult += throughput *
+                                              Vec3(bsdf.evaluateSpecular(ls.direction)) *
+                                              ls.emission * (cosSurface * weight / ls.pdf);
+                        else
+                            specularResult += specularThroughput * bsdf.evaluate(ls.direction) *
+                                              ls.emission * (cosSurface * weight / ls.pdf);
+                    }
                 }
             }
         }
@@ -582,6 +611,13 @@ Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng) {
         if (!bsdf.sample(rng, wi)) break;
         float pdf = bsdf.pdf(wi);
         if (!(pdf > 0.0f)) break;
+        if (split) {
+            if (depth == 0)
+                specularThroughput =
+                    throughput * Vec3(bsdf.evaluateSpecular(wi)) * (dot(wi, n) / pdf);
+            else
+                specularThroughput *= bsdf.evaluate(wi) * (dot(wi, n) / pdf);
+        }
         throughput *= bsdf.evaluate(wi) * (dot(wi, n) / pdf);
         previousPdf = pdf;
 
@@ -589,9 +625,11 @@ Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng) {
             float q = std::min(0.95f, maxComponent(throughput));
             if (!(rng.uniform() < q)) break;
             throughput *= 1.0f / q;
+            if (split) specularThroughput *= 1.0f / q;
         }
         ray = {x, wi};
     }
+    if (split) *specular = specularResult;
     return result;
 }
 
@@ -624,28 +662,40 @@ std::optional<Matrix4> inverseOf(const Matrix4& m) {
 
 }  // namespace
 
-Image renderRadiance(const Scene& scene, const TraceSettings& settings) {
+Image renderRadiance(const Scene& scene, const TraceSettings& settings, Image* specularOut) {
     CompiledScene compiled(scene);
     const int w = settings.width, h = settings.height;
     CameraFrame camera = cameraFrame(scene.camera, w, h);
     Image image(w, h, 3);
+    const bool split = specularOut != nullptr;
+    if (split) *specularOut = Image(w, h, 3);
     const int spp = std::max(1, settings.samplesPerPixel);
 #pragma omp parallel for schedule(dynamic)
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(w) + std::uint64_t(x);
             double sum[3] = {0.0, 0.0, 0.0};
+            double specularSum[3] = {0.0, 0.0, 0.0};
             for (int s = 0; s < spp; ++s) {
                 Rng rng = sampleRng(settings, pixel, std::uint64_t(s));
                 float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                 Ray ray{camera.position, camera.direction(px, py)};
-                Vec3 l = radiance(compiled, ray, settings.maxDepth, rng);
+                Vec3 specular(0.0f);
+                Vec3 l =
+                    radiance(compiled, ray, settings.maxDepth, rng, split ? &specular : nullptr);
                 if (!isFinite(l)) continue;  // never write NaN/Inf; the sample counts as 0
                 sum[0] += l.x;
                 sum[1] += l.y;
                 sum[2] += l.z;
+                if (split && isFinite(specular)) {  // a non-finite one counts as 0 too
+                    specularSum[0] += specular.x;
+                    specularSum[1] += specular.y;
+                    specularSum[2] += specular.z;
+                }
             }
             for (int c = 0; c < 3; ++c) image.at(x, y, c) = float(sum[c] / spp);
+            if (split)
+                for (int c = 0; c < 3; ++c) specularOut->at(x, y, c) = float(specularSum[c] / spp);
         }
     }
     return image;
@@ -713,7 +763,18 @@ std::vector<GradientSample> traceGradientSamples(const Scene& previous, const Sc
     return out;
 }
 
-Frame renderGBuffer(const Scene& scene, int width, int height) {
+namespace {
+
+float linearRoughness(const Material& m) {
+    if (!(m.specular > 0.0f)) return 1.0f;  // no glossy lobe: as rough as it gets
+    // Phong exponent n ~ Beckmann/GGX alpha = sqrt(2 / (n + 2)); linear roughness = sqrt(alpha).
+    float alpha = std::sqrt(2.0f / (std::max(0.0f, m.exponent) + 2.0f));
+    return std::clamp(std::sqrt(alpha), 0.0f, 1.0f);
+}
+
+}  // namespace
+
+Frame renderGBuffer(const Scene& scene, int width, int height, bool split) {
     CompiledScene compiled(scene);
     CameraFrame camera = cameraFrame(scene.camera, width, height);
     Frame f;
@@ -722,6 +783,10 @@ Frame renderGBuffer(const Scene& scene, int width, int height) {
     f.depth = Image(width, height, 1);
     f.albedo = Image(width, height, 3);
     f.objectId.assign(std::size_t(width) * height, -1);
+    if (split) {
+        f.roughness = Image(width, height, 1);
+        f.hitDistance = Image(width, height, 1);
+    }
 #pragma omp parallel for schedule(dynamic)
     for (int y = 0; y < height; ++y) {
         for (int x = 0; x < width; ++x) {
@@ -736,7 +801,22 @@ Frame renderGBuffer(const Scene& scene, int width, int height) {
                 p = s.position;
                 n = dot(s.normal, ray.direction) < 0.0f ? s.normal : -s.normal;
                 depth = dot(p - camera.position, camera.forward);
-                albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular) + Vec3(m.specular);
+                if (split) {
+                    albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular);  // diffuse only
+                    f.roughness->at(x, y) = linearRoughness(m);
+                    // The mirror direction's hit distance: deterministic and noise-free (not the
+                    // distance of the path's sampled glossy ray), 0 on a miss or without a lobe.
+                    float hitDistance = 0.0f;
+                    if (m.specular > 0.0f) {
+                        Vec3 wo = -ray.direction;
+                        Ray mirror{offsetPoint(p, n), n * (2.0f * dot(wo, n)) - wo};
+                        Hit reflected = compiled.closest(mirror);
+                        if (reflected.object >= 0) hitDistance = reflected.t;
+                    }
+                    f.hitDistance->at(x, y) = hitDistance;
+                } else {
+                    albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular) + Vec3(m.specular);
+                }
                 id = hit.object;
             }
             for (int c = 0; c < 3; ++c) {
@@ -754,9 +834,15 @@ Frame renderGBuffer(const Scene& scene, int width, int height) {
     return f;
 }
 
-Frame renderFrame(const Scene& scene, const TraceSettings& settings) {
-    Frame f = renderGBuffer(scene, settings.width, settings.height);
-    f.beauty = renderRadiance(scene, settings);
+Frame renderFrame(const Scene& scene, const TraceSettings& settings, bool split) {
+    Frame f = renderGBuffer(scene, settings.width, settings.height, split);
+    if (split) {
+        Image specular;
+        f.beauty = renderRadiance(scene, settings, &specular);
+        f.specular = std::move(specular);
+    } else {
+        f.beauty = renderRadiance(scene, settings);
+    }
     return f;
 }
 

@@ -31,7 +31,14 @@ constexpr std::uint32_t kReferenceStream = 1;
 
 // Mean radiance of `samplesPerPixel` camera paths per pixel, each through a uniformly jittered
 // point of the pixel; 3 channels. Nothing is clamped; a non-finite sample counts as 0.
-Image renderRadiance(const Scene& scene, const TraceSettings& settings);
+// With specularOut, also the split signal into it (3 channels, the same paths): the part of the
+// radiance that left each path's first surface through its glossy (Phong) lobe, split exactly by
+// lobe there (next-event estimation at the first surface by BSDF term, everything after it in
+// the ratio f_specular / f at the sampled direction). Emission at the first hit and background
+// seen by the camera are diffuse; the diffuse part is the radiance minus it. The returned
+// radiance (and the random numbers) are the same with or without it.
+Image renderRadiance(const Scene& scene, const TraceSettings& settings,
+                     Image* specularOut = nullptr);
 
 struct PixelCoord {
     int x = 0;
@@ -57,9 +64,15 @@ std::vector<GradientSample> traceGradientSamples(const Scene& previous, const Sc
 // camera), position (the camera position on background), depth (camera z, 0 on background),
 // object ID (-1 on background), albedo (diffuse texture times (1 - specular) plus specular, 0
 // on background) and the matrices. The beauty is left empty.
-Frame renderGBuffer(const Scene& scene, int width, int height);
+// With split (the split signal's G-buffer): albedo is the diffuse albedo alone (texture times
+// (1 - specular)), roughness the first surface's linear roughness (Phong exponent n as GGX alpha
+// = sqrt(2 / (n + 2)), roughness = sqrt(alpha); 1 without a glossy lobe, 0 on background) and
+// hitDistance the distance along the mirror reflection of the pixel-centre ray about the normal
+// (deterministic, noise-free; 0 on a miss, on background and without a glossy lobe).
+Frame renderGBuffer(const Scene& scene, int width, int height, bool split = false);
 
-// Both of the above: one frame of a sequence.
-Frame renderFrame(const Scene& scene, const TraceSettings& settings);
+// Both of the above: one frame of a sequence; with split also frame.specular (renderRadiance's
+// specularOut at the beauty's samples) and the split G-buffer.
+Frame renderFrame(const Scene& scene, const TraceSettings& settings, bool split = false);
 
 }  // namespace rtd::render

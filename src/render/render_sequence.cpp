@@ -119,8 +119,9 @@ std::string sceneJson(const SceneDefinition& d, const RenderSettings& s,
 // "<prefix>_<n>.<ext>" of the layout with n >= frames: left from an earlier, longer render they
 // would be read as part of this sequence.
 void removeStaleFrames(const fs::path& folder, int frames) {
-    static const std::string_view kStems[] = {"beauty", "albedo", "normal",    "position",
-                                              "depth",  "ID",     "reference", "confidence"};
+    static const std::string_view kStems[] = {"beauty",   "albedo",    "normal",      "position",
+                                              "depth",    "ID",        "reference",   "confidence",
+                                              "specular", "roughness", "hit_distance"};
     for (std::string_view stem : kStems) removeNumberedFiles(folder, stem, ".exr", frames);
     removeNumberedFiles(folder, "matrix", ".mat", frames);
 }
@@ -231,6 +232,10 @@ void validate(const RenderSettings& s) {
         throw Error(ErrorCode::InvalidArgument,
                     "confidence is written in the folder layout only (Blender's files have no "
                     "such pass)");
+    if (s.split && s.format == OutputFormat::Multilayer)
+        throw Error(ErrorCode::InvalidArgument,
+                    "the split signal (specular, roughness, hit distance) is written in the "
+                    "folder layout only");
 }
 
 Image screenMotion(const Frame& frame, const Scene& current, const Scene& other) {
@@ -281,6 +286,8 @@ double pathCount(const RenderSettings& s) {
     // Confidence: 2 paths per 3x3 stratum on every frame but the first.
     const double strata = double((s.width + 2) / 3) * double((s.height + 2) / 3);
     const double confidencePaths = s.confidence ? 2.0 * strata * (s.frames - 1) : 0.0;
+    // The split signal adds none: specular comes from the beauty's own paths (its one mirror ray
+    // per pixel is a G-buffer ray).
     return pixels * s.frames * (s.spp + (s.gbufferOnly ? 0 : s.referenceSpp)) + confidencePaths;
 }
 
@@ -309,6 +316,9 @@ void renderSequence(const std::string& sceneName, const RenderSettings& settings
     removeStaleFrames(outDir, multilayer ? 0 : settings.frames);
     // Without confidence none of an earlier render's may stay to be read as this one's.
     if (!settings.confidence) removeNumberedFiles(outDir, "confidence", ".exr", 0);
+    if (!settings.split)
+        for (std::string_view stem : {"specular", "roughness", "hit_distance"})
+            removeNumberedFiles(outDir, stem, ".exr", 0);
     removeStaleMultilayerFrames(outDir, multilayer ? settings.frames : 0);
     if (fs::is_directory(referenceDir)) {
         removeStaleFrames(referenceDir, multilayer ? 0 : kept);
@@ -328,7 +338,7 @@ void renderSequence(const std::string& sceneName, const RenderSettings& settings
         trace.seed = settings.seed;
         trace.frameIndex = i;
         trace.stream = kBeautyStream;
-        Frame frame = renderFrame(scenes[i], trace);
+        Frame frame = renderFrame(scenes[i], trace, settings.split);
         if (settings.confidence)
             frame.confidence = i == 0 ? Image(settings.width, settings.height, 1, 1.0f)
                                       : historyConfidence(scenes[i - 1], scenes[i], frame, trace);

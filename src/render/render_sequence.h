@@ -31,6 +31,10 @@ struct RenderSettings {
     // Also confidence_<i>.exr (folder layout only): the history confidence of A-SVGF's temporal
     // gradients (render/confidence.h), 1 on frame 0; about 2/9 more paths than a 1-spp beauty.
     bool confidence = false;
+    // The split signal too (folder layout only): specular_<i>.exr (the beauty's glossy part, at
+    // its spp, from the same paths), roughness_<i>.exr and hit_distance_<i>.exr; albedo_<i>.exr is
+    // then the diffuse albedo (render/path_tracer.h's renderFrame with split). No extra paths.
+    bool split = false;
     OutputFormat format = OutputFormat::Folder;
 };
 
@@ -40,7 +44,8 @@ struct SceneInfo {
 std::vector<SceneInfo> listScenes();
 
 // Writes, for i = 0..frames-1, beauty_i.exr, albedo_i.exr, normal_i.exr, position_i.exr,
-// depth_i.exr, ID_i.exr, matrix_i.mat, confidence_i.exr (with `confidence`) and (unless
+// depth_i.exr, ID_i.exr, matrix_i.mat, confidence_i.exr (with `confidence`), specular_i.exr,
+// roughness_i.exr and hit_distance_i.exr (with `split`) and (unless
 // gbufferOnly) reference/reference_i.exr, plus
 // scene.json describing the render (written last). With OutputFormat::Multilayer, frame i is
 // instead the Blender-style multilayer <i+1>.exr (0001.exr ..., writeBlenderExr: motion vectors

@@ -246,6 +246,76 @@ def test_zero_confidence_drops_the_detail_methods_history(frames):
     assert np.abs(continued - fresh).max() > 1e-3
 
 
+def split_signal(inputs, hit_distance=True):
+    """The split signal for a frame's inputs: a quarter of its colour as specular."""
+    height, width = inputs["color"].shape[:2]
+    rng = np.random.default_rng(4)
+    signal = dict(
+        specular=(0.25 * inputs["color"][..., :3]).astype(np.float32),
+        roughness=rng.uniform(0, 1, (height, width)).astype(np.float32),
+    )
+    if hit_distance:
+        signal["hit_distance"] = rng.uniform(0, 5, (height, width)).astype(np.float32)
+    return signal
+
+
+@pytest.mark.parametrize("hit_distance", [True, False])
+def test_the_split_signal_is_taken_by_detail(frames, hit_distance):
+    den = rtdenoise.Denoiser("detail", device="cpu")
+    for frame in frames[:2]:
+        inputs = frame.inputs()
+        for name in ("specular", "roughness", "hit_distance"):
+            assert inputs.pop(name) is None  # the scene is rendered without it
+        result = den.denoise(**inputs, **split_signal(inputs, hit_distance))
+        assert result.shape == inputs["color"].shape[:2] + (3,)
+        assert np.all(np.isfinite(result))
+    # Half roughness, RGBA specular.
+    signal = split_signal(inputs, hit_distance)
+    signal["roughness"] = signal["roughness"].astype(np.float16)
+    signal["specular"] = np.concatenate(
+        [signal["specular"], np.ones(signal["specular"].shape[:2] + (1,), np.float32)], axis=-1
+    )
+    assert np.all(np.isfinite(den.denoise(**inputs, **signal)))
+
+
+def test_the_split_signal_needs_its_partner(frames):
+    den = rtdenoise.Denoiser("detail", device="cpu")
+    inputs = frames[0].inputs()
+    signal = split_signal(inputs)
+    for name in ("specular", "roughness", "hit_distance"):
+        inputs.pop(name)
+    error = error_of(den.denoise, **inputs, roughness=signal["roughness"])
+    assert "roughness is given without specular" in str(error)
+    assert error.code == rtdenoise.ErrorCode.INVALID_INPUT
+    error = error_of(den.denoise, **inputs, hit_distance=signal["hit_distance"])
+    assert "hit_distance" in str(error) or "hitDistance" in str(error)
+    error = error_of(den.denoise, **inputs, specular=signal["specular"])
+    assert "specular is given without roughness" in str(error)
+    error = error_of(den.denoise, **inputs, **dict(signal, roughness=signal["roughness"][:-1]))
+    assert "roughness" in str(error) and error.code == rtdenoise.ErrorCode.INVALID_ARGUMENT
+    assert np.all(np.isfinite(den.denoise(**inputs, **signal)))  # still usable
+
+
+def test_the_split_signal_is_read_from_a_sequence(scene, tmp_path):
+    import shutil
+
+    folder = tmp_path / "split"
+    shutil.copytree(scene, folder)
+    frame = rtdenoise.open_sequence(folder)[0]
+    height, width = frame.shape
+    specular = np.full((height, width, 3), 0.125, np.float32)
+    rtdenoise.write_exr(folder / "specular_0.exr", specular)
+    rtdenoise.write_exr(folder / "roughness_0.exr", np.full((height, width), 0.5, np.float32))
+    rtdenoise.write_exr(folder / "hit_distance_0.exr", np.full((height, width), 3.0, np.float32))
+    frame = rtdenoise.open_sequence(folder)[0]
+    np.testing.assert_array_equal(frame.specular, specular)
+    assert frame.roughness.shape == (height, width) and np.all(frame.roughness == 0.5)
+    assert frame.hit_distance.shape == (height, width) and np.all(frame.hit_distance == 3.0)
+    assert rtdenoise.open_sequence(folder)[1].specular is None
+    result = rtdenoise.Denoiser("detail", device="cpu").denoise_frame(frame)
+    assert np.all(np.isfinite(result))
+
+
 def test_single_frame_methods_need_no_matrices(plane):
     color = np.random.default_rng(2).uniform(0, 1, plane.depth.shape + (3,)).astype(np.float32)
     inputs = plane.inputs(color)

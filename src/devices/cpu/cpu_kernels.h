@@ -53,6 +53,9 @@ namespace rtd {
     X(DetailAccumulateConfidenceKernel)   \
     X(DetailClampKernel)                  \
     X(DetailScaleKernel)                  \
+    X(DetailSpecularReprojectKernel)      \
+    X(DetailSplitKernel)                  \
+    X(AddToOutputKernel)                  \
     X(ModulateKernel)
 
 // One entry per kernel: runs it over a width x height grid of pixels on all cores, with the

@@ -326,6 +326,8 @@ class CudaDevice final : public Device {
     void run(const DetailClampStep& s) override {
         runDetailClampStep(s, [this](const auto& k) { launch(k); });
     }
+    void run(const DetailSplitStep& s) override { launch(s.split); }
+    void run(const AddToOutputStep& s) override { launch(s.add); }
     void run(const ModulateStep& s) override { launch(s.modulate); }
 
     void* allocate(std::size_t bytes) override {
