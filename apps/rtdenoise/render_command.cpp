@@ -117,8 +117,8 @@ Command addRenderCommand(CLI::App& app) {
     c->add_flag("--split", s.split,
                 "Also the split signal: specular_<i>.exr (the beauty's part that left the first "
                 "surface through its glossy lobe, same paths and spp), roughness_<i>.exr (linear "
-                "roughness) and hit_distance_<i>.exr (mirror-ray hit distance, 0 = unknown); "
-                "albedo_<i>.exr becomes the diffuse albedo (folder layout only)");
+                "roughness) and hit_distance_<i>.exr (mirror-ray hit distance, 0 = unknown) "
+                "(folder layout only)");
     c->add_option_function<std::string>(
          "--format",
          [&s](const std::string& value) {

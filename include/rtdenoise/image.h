@@ -73,8 +73,8 @@ struct Frame {
     std::optional<Image> confidence;
     // The split signal (optional; NVIDIA NRD's diffuse/specular inputs). specular: 3 channels, the
     // part of beauty that left the first surface through its glossy lobe (the diffuse part is
-    // beauty - specular; `albedo` then demodulates the diffuse part only, so it should be the
-    // diffuse albedo, as Cycles' DiffCol). roughness: 1 channel in [0, 1] (sqrt of GGX alpha),
+    // beauty - specular, demodulated by `albedo` as the beauty is; the specular part is not
+    // demodulated). roughness: 1 channel in [0, 1] (sqrt of GGX alpha),
     // needed with specular. hitDistance: 1 channel, world units from the first surface to what
     // its specular ray hit (0: unknown), optional: it lets reflections be reprojected.
     std::optional<Image> specular;

@@ -137,8 +137,8 @@ RTD_API const char* rtdGetString(RTDDenoiser denoiser, const char* name);
  *              holds (NVIDIA NRD's IN_DIFF_CONFIDENCE; 0 where the lighting changed); values
  *              outside are clamped, NaN reads as 1. Read by the methods with history
  *   "specular" optional, as color: the part of color that left the first surface through its
- *              glossy lobe (the split signal, NVIDIA NRD's diffuse/specular inputs; "albedo" is
- *              then the diffuse albedo). Read by method "detail" only; needs "roughness"
+ *              glossy lobe (the split signal, NVIDIA NRD's diffuse/specular inputs).
+ *              Read by method "detail" only; needs "roughness"
  *   "roughness" with "specular", 1 float or half value in [0, 1] (sqrt of GGX alpha)
  *   "hit_distance" optional, with "specular": 1 float or half value, world units from the
  *              first surface to what its specular ray hit (0: unknown)

@@ -257,13 +257,24 @@ struct DetailSplitKernel {
     Planes3 noisy;   // in: beauty / albedo; out: the diffuse signal
     Planes3 albedo;  // the ingest's factor (floored at its epsilon, 1 on background)
     InputSpan specular;
+    InputSpan roughness;
     Planes3 specularOut;
+    // A rough lobe's reflection is as blurred as the diffuse light: between these roughnesses it
+    // goes over into the diffuse signal, whose history and filter it then shares (filtered
+    // apart, a rough lobe's 1-spp samples add noise: docs/quality.md).
+    static constexpr float kSpecularUpTo = 0.3f, kDiffuseFrom = 0.45f;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = layout.index(x, y);
+        float r = roughness.load(x, y, 0);  // NaN: specular kept
+        float keep =
+            r > kSpecularUpTo
+                ? maxf(0.0f, minf(1.0f, (kDiffuseFrom - r) / (kDiffuseFrom - kSpecularUpTo)))
+                : 1.0f;
         Float3 s = make3(finiteNonNegative(specular.load(x, y, 0)),
                          finiteNonNegative(specular.load(x, y, 1)),
-                         finiteNonNegative(specular.load(x, y, 2)));
+                         finiteNonNegative(specular.load(x, y, 2))) *
+                   keep;
         Float3 n = noisy.load(i), a = albedo.load(i);
         noisy.store(i, make3(maxf(n.x - s.x / a.x, 0.0f), maxf(n.y - s.y / a.y, 0.0f),
                              maxf(n.z - s.z / a.z, 0.0f)));
@@ -297,6 +308,18 @@ struct DetailSpecularReprojectKernel {
     static constexpr float kParallaxFrames = 8.0f;
     static constexpr float kNormalAgreement = 0.9f;  // cosine between now and then
 
+    // The surface's curvature at i (1 / radius), from the normal's and the position's change to
+    // the neighbours on the same object: a convex mirror's virtual image is nearer than the hit.
+    RTD_HOST_DEVICE RTD_INLINE float curvatureAt(PixelIndex i, PixelIndex step) const {
+        std::int32_t id = g.objectId[i];
+        PixelIndex j = g.objectId[i + step] == id ? i + step : i - step;
+        bool same = g.objectId[j] == id;
+        Float3 dn = g.normal.load(j) - g.normal.load(i);
+        Float3 dp = g.position.load(j) - g.position.load(i);
+        float dp2 = dot(dp, dp);
+        return same && dp2 > 0.0f ? std::sqrt(dot(dn, dn) / dp2) : 0.0f;
+    }
+
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
@@ -314,9 +337,16 @@ struct DetailSpecularReprojectKernel {
         float distance = hitDistance.data ? finiteNonNegative(hitDistance.load(x, y, 0)) : 0.0f;
         bool followed = false;
         float parallax = std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
+        // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at
+        // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
+        // a sphere's reflection moves almost with its surface.
+        float k = maxf(curvatureAt(i, 1), curvatureAt(i, L.pitch));
+        float focal = 0.5f / maxf(k, 1e-6f);
+        distance = distance * focal / (distance + focal);
         if (distance > 0.0f && !previous.fromMotion) {
             Float3 view = normalize(position - cameraPosition);
-            Float4 v = transformPoint(object.currentWorldToPreviousScreen, position + view * distance);
+            Float4 v =
+                transformPoint(object.currentWorldToPreviousScreen, position + view * distance);
             float vx = v.x / (v.w > 0.0f ? v.w : 1.0f) - 0.5f;
             float vy = v.y / (v.w > 0.0f ? v.w : 1.0f) - 0.5f;
             bool onScreen = v.w > 0.0f && vx > -1.0f && vx < float(L.width) && vy > -1.0f &&
@@ -333,7 +363,8 @@ struct DetailSpecularReprojectKernel {
                 for (int t = 0; t < 4; ++t) {
                     PixelIndex j = L.index(x0 + (t & 1), y0 + (t >> 1));
                     Float3 n = previous.normal.load(j);
-                    bool ok = previous.objectId[j] == id && dot(n, expectedNormal) > kNormalAgreement;
+                    bool ok =
+                        previous.objectId[j] == id && dot(n, expectedNormal) > kNormalAgreement;
                     float w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
                     taps.index[t] = j;
                     taps.weight[t] = ok ? w : 0.0f;
@@ -342,8 +373,8 @@ struct DetailSpecularReprojectKernel {
                 if (total > 1e-3f) {
                     RTD_UNROLL
                     for (int t = 0; t < 4; ++t) taps.weight[t] /= total;
-                    DetailHistorySample h = gatherDetailHistory(
-                        taps, previousSlow, previousFast, previousMoments, previousLength);
+                    DetailHistorySample h = gatherDetailHistory(taps, previousSlow, previousFast,
+                                                                previousMoments, previousLength);
                     DetailReproject<false>::store(history, i, h);
                     validity[i] = kReprojectionValid;
                     followed = true;

@@ -158,9 +158,10 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
         specularNoisy = p.declare(floatImage("specularNoisy", 3));
         p.addPass("detail-split", StepKind::DetailSplit, {p.frame(), f.noisy, f.albedo},
                   {f.noisy, specularNoisy}, 0, [f, specularNoisy](const PassContext& c) {
-                      c.device().run(DetailSplitStep{{c.layout(), c.planes(f.noisy),
-                                                      c.planes(f.albedo), c.frame().specular,
-                                                      c.planes(specularNoisy)}});
+                      DetailSplitStep step{{c.layout(), c.planes(f.noisy), c.planes(f.albedo),
+                                            c.frame().specular, c.frame().roughness,
+                                            c.planes(specularNoisy)}};
+                      c.device().run(step);
                   });
     }
     ResourceId in = declareDespeckle(p, settings, f);

@@ -73,9 +73,9 @@ void declareSpatialFilter(Pipeline& pipeline, const DenoiserSettings& settings,
 // a modulate pass follows. toOutput false: the last one writes filterA or filterB like the
 // others. Returns what the last one wrote.
 ResourceId declareGuidedIterations(Pipeline& pipeline, const FrameImages& images,
-                                   const std::string& prefix, ResourceId derivatives,
-                                   ResourceId in, ResourceId filterA, ResourceId filterB,
-                                   int iterations, SvgfTerms terms, int feedbackIteration = -1,
+                                   const std::string& prefix, ResourceId derivatives, ResourceId in,
+                                   ResourceId filterA, ResourceId filterB, int iterations,
+                                   SvgfTerms terms, int feedbackIteration = -1,
                                    ResourceId feedback = {}, bool toOutput = true);
 // "modulate": the albedo multiplied back into `source` (its first three planes), written into
 // the output.

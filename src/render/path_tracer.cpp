@@ -801,8 +801,8 @@ Frame renderGBuffer(const Scene& scene, int width, int height, bool split) {
                 p = s.position;
                 n = dot(s.normal, ray.direction) < 0.0f ? s.normal : -s.normal;
                 depth = dot(p - camera.position, camera.forward);
+                albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular) + Vec3(m.specular);
                 if (split) {
-                    albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular);  // diffuse only
                     f.roughness->at(x, y) = linearRoughness(m);
                     // The mirror direction's hit distance: deterministic and noise-free (not the
                     // distance of the path's sampled glossy ray), 0 on a miss or without a lobe.
@@ -814,8 +814,6 @@ Frame renderGBuffer(const Scene& scene, int width, int height, bool split) {
                         if (reflected.object >= 0) hitDistance = reflected.t;
                     }
                     f.hitDistance->at(x, y) = hitDistance;
-                } else {
-                    albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular) + Vec3(m.specular);
                 }
                 id = hit.object;
             }

@@ -64,8 +64,7 @@ std::vector<GradientSample> traceGradientSamples(const Scene& previous, const Sc
 // camera), position (the camera position on background), depth (camera z, 0 on background),
 // object ID (-1 on background), albedo (diffuse texture times (1 - specular) plus specular, 0
 // on background) and the matrices. The beauty is left empty.
-// With split (the split signal's G-buffer): albedo is the diffuse albedo alone (texture times
-// (1 - specular)), roughness the first surface's linear roughness (Phong exponent n as GGX alpha
+// With split (the split signal's G-buffer), also roughness: the first surface's linear roughness (Phong exponent n as GGX alpha
 // = sqrt(2 / (n + 2)), roughness = sqrt(alpha); 1 without a glossy lobe, 0 on background) and
 // hitDistance the distance along the mirror reflection of the pixel-centre ray about the normal
 // (deterministic, noise-free; 0 on a miss, on background and without a glossy lobe).

@@ -32,8 +32,8 @@ struct RenderSettings {
     // gradients (render/confidence.h), 1 on frame 0; about 2/9 more paths than a 1-spp beauty.
     bool confidence = false;
     // The split signal too (folder layout only): specular_<i>.exr (the beauty's glossy part, at
-    // its spp, from the same paths), roughness_<i>.exr and hit_distance_<i>.exr; albedo_<i>.exr is
-    // then the diffuse albedo (render/path_tracer.h's renderFrame with split). No extra paths.
+    // its spp, from the same paths), roughness_<i>.exr and hit_distance_<i>.exr (render/path_tracer.h's
+    // renderFrame with split). No extra paths.
     bool split = false;
     OutputFormat format = OutputFormat::Folder;
 };
