@@ -59,6 +59,15 @@ TEST(Gpu, CpuAndCudaAgreeOnARenderedScene) {
     expectBackEndsAgree(frames, "moving-objects");
 }
 
+// The split signal's passes (detail's specular histories, the reflection's reprojection).
+TEST(Gpu, CpuAndCudaAgreeOnTheSplitSignal) {
+    std::string reason = cudaUnavailableReason();
+    if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
+    std::vector<Frame> frames = test::renderSmallSequence("reflections", 96, 64, 4, true);
+    ASSERT_TRUE(frames[1].specular && frames[1].hitDistance);
+    expectBackEndsAgree(frames, "reflections, split", {Method::Detail});
+}
+
 // The firefly removal's tile pass on the GPU (shared memory, a barrier between phases) gives
 // the CPU's separate passes' result, whichever the GPU's default.
 TEST(Gpu, CudaTilePassesAgreeWithTheCpu) {

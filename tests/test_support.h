@@ -165,14 +165,16 @@ inline double maxRelativeDifference(const Image& a, const Image& b) {
 }
 
 // The frames (G-buffer and 1-spp beauty) of a small rendered sequence: 96x64, 4 frames.
+// split: with the split signal (specular, roughness, hit distance).
 inline std::vector<Frame> renderSmallSequence(const std::string& scene, int width = 96,
-                                              int height = 64, int frames = 4) {
+                                              int height = 64, int frames = 4, bool split = false) {
     TempFolder dir("small-" + scene);
     render::RenderSettings r;
     r.width = width;
     r.height = height;
     r.frames = frames;
     r.gbufferOnly = true;
+    r.split = split;
     render::renderSequence(scene, r, dir.path());
     Sequence sequence(dir.path());
     std::vector<Frame> result;

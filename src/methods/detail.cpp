@@ -134,7 +134,7 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     // its wide luminance tolerance (there is no variance yet).
     SvgfTerms wide = terms;
     wide.sigmaLuminance = 10.0f;
-    constexpr float kShortHistory = 4.0f;  // frames: below, estimate spatially
+    constexpr float kShortHistory = 3.0f;  // frames: below, estimate spatially
     p.addPass(passPrefix + "variance", StepKind::SvgfVariance,
               with(gbufferReads(f), {slow, moments, length, derivatives, variance}), {variance},
               kSvgfWindowRadius, [=](const PassContext& c) {
