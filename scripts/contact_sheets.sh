@@ -2,7 +2,8 @@
 # The README's contact sheets of the hard cases: per scene one row, input / svgf / detail /
 # reference, on the frame that shows the case (thin-geometry frame 7: thin shadows; reflections
 # frame 7: reflections under camera motion; switching-light frame 6: the light just switched
-# off). Writes docs/images/hard_cases.png (and one PNG per scene).
+# off). Writes docs/images/hard_cases.png (and one PNG per scene). The renders carry the split
+# signal (--split), which detail reads and the others ignore.
 #   scripts/contact_sheets.sh [SIZE=160] [REF_SPP=256] [BUILD_DIR=build/release]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,7 +16,7 @@ rows=()
 for case in thin-geometry:7 reflections:7 switching-light:6; do
   scene=${case%:*} frame=${case#*:}
   "$bin" render "$scene" -o "$work/$scene" --width "$size" --height "$size" --frames 8 \
-      --ref-spp "$refspp" -q
+      --ref-spp "$refspp" --split -q
   "$bin" denoise "$work/$scene" -o "$work/$scene-input" "${identity[@]}"
   # The reference tone-mapped like the input: its frames as the beauty of the same G-buffer.
   mkdir "$work/$scene-ref"

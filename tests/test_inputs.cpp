@@ -34,6 +34,26 @@ const std::vector<Frame>& cameraPanFrames() {
 
 // NRD's convention, previous = current + motion: with the motion the matrices imply (camera
 // motion here; the objects do not rotate), every temporal method gives the matrix path's result.
+// Writes frame 1's `file` as RGB (R varied, G 1) and reads frame 1 back: a 1-channel input
+// takes the file's R channel.
+Frame expectRedChannelRead(const Sequence& sequence, const std::filesystem::path& file,
+                           std::optional<Image> Frame::*input) {
+    const Frame base = sequence.readFrame(0);
+    Image rgb(base.width(), base.height(), 3, 0.0f);
+    for (std::size_t p = 0; p < rgb.pixelCount(); ++p) {
+        rgb.pixels[3 * p] = float(p % 7) / 7.0f;
+        rgb.pixels[3 * p + 1] = 1.0f;
+    }
+    writeExr(file, rgb);
+    Frame read = sequence.readFrame(1);
+    EXPECT_TRUE((read.*input).has_value());
+    if (!(read.*input)) return read;
+    EXPECT_EQ((read.*input)->channels, 1);
+    for (std::size_t p = 0; p < rgb.pixelCount(); ++p)
+        EXPECT_EQ((read.*input)->pixels[p], rgb.pixels[3 * p]) << p;
+    return read;
+}
+
 TEST(MotionVectors, FromTheMatricesGiveTheMatrixPathsResult) {
     const std::vector<Frame>& frames = cameraPanFrames();
     std::vector<Frame> moving = withMotion(frames);
@@ -358,17 +378,8 @@ TEST(Confidence, SequenceFoldersReadConfidenceFiles) {
     EXPECT_EQ(first.confidence->channels, 1);
     for (float v : first.confidence->pixels) EXPECT_EQ(v, 1.0f);  // frame 0: no history to doubt
     // An RGB file: its R channel.
-    Image rgb(30, 21, 3, 0.0f);
-    for (std::size_t p = 0; p < rgb.pixelCount(); ++p) {
-        rgb.pixels[3 * p] = float(p % 7) / 7.0f;
-        rgb.pixels[3 * p + 1] = 1.0f;
-    }
-    writeExr(dir.path() / "confidence_1.exr", rgb);
-    Frame second = sequence.readFrame(1);
-    ASSERT_TRUE(second.confidence.has_value());
-    ASSERT_EQ(second.confidence->channels, 1);
-    for (std::size_t p = 0; p < rgb.pixelCount(); ++p)
-        ASSERT_EQ(second.confidence->pixels[p], rgb.pixels[3 * p]);
+    Frame second =
+        expectRedChannelRead(sequence, dir.path() / "confidence_1.exr", &Frame::confidence);
     // A denoiser takes the frames as read.
     Denoiser d(test::cpuSettings(Method::Svgf));
     EXPECT_NO_THROW(d.processFrame(first));
@@ -556,18 +567,9 @@ TEST(SplitSignal, SequenceFoldersReadTheSplitSignalFiles) {
     EXPECT_EQ(first.roughness->pixels, written[0].roughness->pixels);
     EXPECT_EQ(first.hitDistance->pixels, written[0].hitDistance->pixels);
     // An RGB roughness file: its R channel.
+    Frame second =
+        expectRedChannelRead(sequence, dir.path() / "roughness_1.exr", &Frame::roughness);
     const int w = first.width(), h = first.height();
-    Image rgb(w, h, 3, 0.0f);
-    for (std::size_t p = 0; p < rgb.pixelCount(); ++p) {
-        rgb.pixels[3 * p] = float(p % 7) / 7.0f;
-        rgb.pixels[3 * p + 1] = 1.0f;
-    }
-    writeExr(dir.path() / "roughness_1.exr", rgb);
-    Frame second = sequence.readFrame(1);
-    ASSERT_TRUE(second.roughness.has_value());
-    ASSERT_EQ(second.roughness->channels, 1);
-    for (std::size_t p = 0; p < rgb.pixelCount(); ++p)
-        ASSERT_EQ(second.roughness->pixels[p], rgb.pixels[3 * p]);
     // A denoiser takes the frames as read.
     Denoiser d(test::cpuSettings(Method::Detail));
     EXPECT_NO_THROW(d.processFrame(first));

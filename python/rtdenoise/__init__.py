@@ -316,6 +316,14 @@ def _image(name: str, value: Any, size: tuple, channels: Sequence[int], like: st
     return array
 
 
+def _one_channel(name: str, value: Any, size: tuple, like: str) -> Optional[np.ndarray]:
+    """An optional 1-channel input as float (the C API reads float or half)."""
+    if value is None:
+        return None
+    image = _image(name, value, size, (1,), like)
+    return image if image.dtype.kind == "f" else image.astype(np.float32)
+
+
 def _unprojection(world_to_screen: np.ndarray, width: int, height: int):
     """The camera centre c and, per pixel centre, the world-space step v per unit of view depth:
     the point at view depth w on pixel (x, y)'s ray is c + w v. Rows 0, 1 and 3 of s = M p give
@@ -545,20 +553,11 @@ class Denoiser:
                 ids = ids.astype(np.float32)
         if albedo is not None:
             albedo = _image("albedo", albedo, size, (3, 4), like)
-        if confidence is not None:
-            confidence = _image("confidence", confidence, size, (1,), like)
-            if confidence.dtype.kind != "f":
-                confidence = confidence.astype(np.float32)
+        confidence = _one_channel("confidence", confidence, size, like)
         if specular is not None:
             specular = _image("specular", specular, size, (3, 4), like)
-        if roughness is not None:
-            roughness = _image("roughness", roughness, size, (1,), like)
-            if roughness.dtype.kind != "f":
-                roughness = roughness.astype(np.float32)
-        if hit_distance is not None:
-            hit_distance = _image("hit_distance", hit_distance, size, (1,), like)
-            if hit_distance.dtype.kind != "f":
-                hit_distance = hit_distance.astype(np.float32)
+        roughness = _one_channel("roughness", roughness, size, like)
+        hit_distance = _one_channel("hit_distance", hit_distance, size, like)
         if object_count is None:
             object_count = _object_count_of(ids)
         if matrices is None and motion is None:
