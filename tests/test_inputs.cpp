@@ -34,6 +34,22 @@ const std::vector<Frame>& cameraPanFrames() {
 
 // NRD's convention, previous = current + motion: with the motion the matrices imply (camera
 // motion here; the objects do not rotate), every temporal method gives the matrix path's result.
+// Frame 1 is refused, by the sequence check of 2 frames and by reading it, with `message`.
+void expectRefusedWhenReadAndChecked(const Sequence& sequence, const std::string& message) {
+    for (int pass = 0; pass < 2; ++pass) {
+        try {
+            if (pass == 0)
+                sequence.checkFrames(2);
+            else
+                sequence.readFrame(1);
+            ADD_FAILURE() << "accepted frame 1, expected: " << message;
+        } catch (const Error& e) {
+            EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+            EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+        }
+    }
+}
+
 // Writes frame 1's `file` as RGB (R varied, G 1) and reads frame 1 back: a 1-channel input
 // takes the file's R channel.
 Frame expectRedChannelRead(const Sequence& sequence, const std::filesystem::path& file,
@@ -387,19 +403,7 @@ TEST(Confidence, SequenceFoldersReadConfidenceFiles) {
     // Another size.
     writeExr(dir.path() / "confidence_1.exr", Image(29, 21, 1, 1.0f));
     const std::string name = (dir.path() / "confidence_1.exr").string();
-    for (int pass = 0; pass < 2; ++pass) {
-        try {
-            if (pass == 0)
-                sequence.checkFrames(2);
-            else
-                sequence.readFrame(1);
-            ADD_FAILURE() << "accepted a 29x21 confidence";
-        } catch (const Error& e) {
-            EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
-            EXPECT_NE(std::string(e.what()).find(name + ": 29x21, but "), std::string::npos)
-                << e.what();
-        }
-    }
+    expectRefusedWhenReadAndChecked(sequence, name + ": 29x21, but ");
     // Without --confidence a new render leaves none of the old files to be read as its own.
     r.confidence = false;
     render::renderSequence("switching-light", r, dir.path());
@@ -580,21 +584,8 @@ TEST(SplitSignal, SequenceFoldersReadTheSplitSignalFiles) {
         const std::filesystem::path saved = dir.path() / "saved.exr";
         std::filesystem::copy_file(file, saved, std::filesystem::copy_options::overwrite_existing);
         writeExr(file, Image(w - 1, h, std::string(stem) == "specular" ? 3 : 1, 1.0f));
-        for (int pass = 0; pass < 2; ++pass) {
-            try {
-                if (pass == 0)
-                    sequence.checkFrames(2);
-                else
-                    sequence.readFrame(1);
-                ADD_FAILURE() << "accepted a " << w - 1 << "x" << h << " " << stem;
-            } catch (const Error& e) {
-                EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
-                EXPECT_NE(std::string(e.what()).find(
-                              fmt::format("{}: {}x{}, but ", file.string(), w - 1, h)),
-                          std::string::npos)
-                    << e.what();
-            }
-        }
+        expectRefusedWhenReadAndChecked(sequence,
+                                        fmt::format("{}: {}x{}, but ", file.string(), w - 1, h));
         std::filesystem::rename(saved, file);
     }
     // Roughness without specular in a folder: read as it is, refused by the denoiser naming it.

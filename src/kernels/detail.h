@@ -337,13 +337,13 @@ struct DetailSpecularReprojectKernel {
         float distance = hitDistance.data ? finiteNonNegative(hitDistance.load(x, y, 0)) : 0.0f;
         bool followed = false;
         float parallax = std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
-        // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at
-        // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
-        // a sphere's reflection moves almost with its surface.
-        float k = maxf(curvatureAt(i, 1), curvatureAt(i, L.pitch));
-        float focal = 0.5f / maxf(k, 1e-6f);
-        distance = distance * focal / (distance + focal);
         if (distance > 0.0f && !previous.fromMotion) {
+            // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at
+            // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
+            // a sphere's reflection moves almost with its surface.
+            float k = maxf(curvatureAt(i, 1), curvatureAt(i, L.pitch));
+            float focal = 0.5f / maxf(k, 1e-6f);
+            distance = distance * focal / (distance + focal);
             Float3 view = normalize(position - cameraPosition);
             Float4 v =
                 transformPoint(object.currentWorldToPreviousScreen, position + view * distance);
