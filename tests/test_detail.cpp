@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "kernel_harness.h"
 #include "test_support.h"
 
 namespace rtd {
@@ -109,6 +110,55 @@ TEST(Detail, FollowsALightSwitchedOffInTheSameFrame) {
     for (int i = 0; i < 12; ++i) denoiser.processFrame(wallWithShadowLine(1.0f, 0.3f, 30u + i));
     Image out = denoiser.processFrame(wallWithShadowLine(0.2f, 0.06f, 99u));
     EXPECT_NEAR(columnMean(out, 12), 0.2, 0.04);
+}
+
+// The anti-lag's re-blend, on DetailClamp alone (clamp off): the fast history is 1, the frame
+// 0.8 everywhere (no noise: change 0.2), the slow history a checker the new light no longer
+// casts, accumulated over 32 frames. The length is cut to 32 * 0.8^8 and the slow history
+// blended again for it: the frame's share rises from 1/32 to 1/5.4 (a history only scaled by
+// the ratio of the means, 0.8^0.6, would keep 31/32 of the old checker).
+TEST(DetailKernels, TheAntiLagBlendsTheHistoryAgainForItsCutLength) {
+    const int w = 12, h = 10;
+    Harness hs(w, h, 4);
+    DeviceBuffer<float> fast = hs.buffer(3), current = hs.buffer(3), slow = hs.buffer(3),
+                        moments = hs.buffer(2), length = hs.buffer(1), filterIn = hs.buffer(4),
+                        lagScale = hs.buffer(1), fastSums = hs.buffer(7),
+                        currentSums = hs.buffer(3);
+    auto checker = [](int x, int y) { return (x + y) % 2 ? 1.5f : 0.5f; };
+    const float hAccumulated = 32.0f, now = 0.8f;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = hs.layout.index(x, y);
+            hs.planes(fast).store(i, make3(1.0f, 1.0f, 1.0f));
+            hs.planes(current).store(i, make3(now, now, now));
+            const float c0 = checker(x, y) * (1.0f - 1.0f / hAccumulated) + now / hAccumulated;
+            hs.planes(slow).store(i, make3(c0, c0, c0));
+            length.data()[i] = hAccumulated;
+        }
+    GBufferView g = hs.gbuffer();
+    constexpr int kRadius = DetailClampKernel::kRadius;
+    DetailClampStep step{{g, hs.planes(fast), hs.planeSet(fastSums), kRadius},
+                         {g, hs.planes(current), hs.planeSet(currentSums), kRadius},
+                         {g, hs.planes(current), hs.planeSet(fastSums), hs.planeSet(currentSums),
+                          hs.planes(slow), hs.planeSet(moments), length.data(),
+                          hs.planeSet(filterIn), lagScale.data(), 0.0f, 6.0f, 1},
+                         {hs.layout, hs.planes(fast), lagScale.data()}};
+    runDetailClampStep(step, [&](const auto& kernel) { hs.device->launch(kernel, w, h); });
+    const float cut = hAccumulated * std::pow(0.8f, 8.0f);  // 5.37 frames
+    const float ratio = std::pow(0.8f, 0.6f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = hs.layout.index(x, y);
+            // The length as written (the change is 0.2 less 3 standard errors of a mean that
+            // float sums leave a hair above 0).
+            const float cutHere = length.data()[i];
+            ASSERT_NEAR(cutHere, cut, 0.01f * cut) << x << ", " << y;
+            const float keep = (1.0f - 1.0f / cutHere) / (1.0f - 1.0f / hAccumulated);
+            const float old = checker(x, y) * (1.0f - 1.0f / hAccumulated);
+            const float want = now / cutHere + old * ratio * keep;
+            ASSERT_NEAR(hs.planes(slow).load(i).x, want, 1e-3f) << x << ", " << y;
+            ASSERT_NEAR(hs.planes(fast).load(i).y, ratio, 1e-4f);  // scaled, not re-blended
+        }
 }
 
 // Confidence 0 everywhere drops the history: the frame's result is a fresh denoiser's.

@@ -407,6 +407,47 @@ TEST(SvgfKernels, InterleavedGuideGivesThePlanarKernelsResults) {
     expectSamePlanes(varPlanar, varPacked, 4, "variance");
     EXPECT_NE(hs.planeSet(varPlanar).at(3, hs.layout.index(11, 8)),
               hs.planeSet(in).at(3, hs.layout.index(11, 8)));
+    // Faded (the detail method's form): the spatial estimate's share falls from 1 at a length
+    // of 1 to 0 at 5, mixed with the kept values. Known answer from the unfaded estimate of
+    // every pixel (shortHistory 5, all lengths below it; its variance is scaled by 5 / h
+    // rather than 1 / h).
+    DeviceBuffer<float> fullPlanar = hs.buffer(4), fadedPlanar = hs.buffer(4),
+                        fadedPacked = hs.buffer(4);
+    for (auto* b : {&fullPlanar, &fadedPlanar, &fadedPacked})
+        for (int i = 0; i < 4 * hs.layout.planeSize; ++i) b->data()[i] = in.data()[i];
+    hs.device->launch(SvgfVarianceKernel{planar, hs.planeSet(derivatives), hs.planeSet(in).rgb(),
+                                         hs.planeSet(moments), length.data(),
+                                         hs.planeSet(fullPlanar), terms, 5.0f},
+                      w, h);
+    hs.device->launch(SvgfVarianceKernel{planar, hs.planeSet(derivatives), hs.planeSet(in).rgb(),
+                                         hs.planeSet(moments), length.data(),
+                                         hs.planeSet(fadedPlanar), terms, 1.0f, 5.0f},
+                      w, h);
+    hs.device->launch(
+        SvgfVarianceInterleavedKernel{packed, hs.planeSet(derivatives), hs.planeSet(in).rgb(),
+                                      hs.planeSet(moments), length.data(), hs.planeSet(fadedPacked),
+                                      terms, 1.0f, 5.0f},
+        w, h);
+    expectSamePlanes(fadedPlanar, fadedPacked, 4, "faded variance");
+    int mixed = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            auto i = hs.layout.index(x, y);
+            if (hs.ids.data()[i] < 0) continue;
+            const float share = (5.0f - length.data()[i]) / 4.0f;
+            mixed += share > 0.1f && share < 0.9f;
+            for (int k = 0; k < 4; ++k) {
+                const float kept = hs.planeSet(in).at(k, i);
+                const float spatial =
+                    hs.planeSet(fullPlanar).at(k, i) * (k == 3 ? 1.0f / 5.0f : 1.0f);
+                const float want = kept + (spatial - kept) * share;
+                ASSERT_NEAR(
+                    hs.planeSet(fadedPlanar).at(k, i), want,
+                    1e-5f * (std::fabs(want) + std::fabs(kept) + std::fabs(spatial)) + 1e-7f)
+                    << "plane " << k << " at " << x << ", " << y << ", length " << length.data()[i];
+            }
+        }
+    EXPECT_GT(mixed, w * h / 2);
     // The geometry derivatives (depth slopes, normal change).
     DeviceBuffer<float> slopesPlanar = hs.buffer(3), slopesPacked = hs.buffer(3);
     hs.device->launch(GeometryDerivativesKernel{planar, hs.planeSet(slopesPlanar)}, w, h);

@@ -100,8 +100,11 @@ struct SvgfTemporalStageStep {
     bool clampRows = false;
 };
 
+// historyFix (hasHistoryFix): the estimate then written back into the history (detail).
 struct SvgfVarianceStep {
     SvgfVarianceKernel variance;
+    DetailHistoryFixKernel historyFix = {};
+    bool hasHistoryFix = false;
 };
 
 // Modulated: writes the result times the albedo into the output instead of `out`.
@@ -215,8 +218,8 @@ SvgfReproject<Search3x3> svgfReprojectForm(const SvgfReprojectKernel& k) {
 }
 template <int FixedSigmaNormal, bool Interleaved>
 SvgfVariance<FixedSigmaNormal, Interleaved> svgfVarianceForm(const SvgfVarianceKernel& k) {
-    return {k.g,      k.derivatives, k.illumination, k.moments,
-            k.length, k.out,         k.terms,        k.shortHistory};
+    return {k.g,   k.derivatives, k.illumination, k.moments,  k.length,
+            k.out, k.terms,       k.shortHistory, k.fadeUntil};
 }
 template <int FixedSigmaNormal, bool Modulated, bool Interleaved>
 SvgfAtrous<FixedSigmaNormal, Modulated, Interleaved> svgfAtrousForm(

@@ -157,10 +157,10 @@ using DetailAccumulateConfidenceKernel = DetailAccumulate<true>;
 // History clamping, anti-lag and the A-Trous input, over each pixel's 5x5 window of object
 // pixels (window sums of the fast history and of the current frame's luminance):
 // - anti-lag (antiLag): where the current frame's mean differs from the fast history's by more
-//   than 3 standard errors of the current mean, the lighting changed. Both histories are
-//   scaled towards the current level by the ratio of the means to the power min(1, 3 change)
-//   (the level follows, the detail is kept), and the history length is cut by (1 - change)^4
-//   (as SVGF's anti-lag), so that the next frames take the new lighting up;
+//   than 3 standard errors of the current mean, the lighting changed. The history length is
+//   cut by (1 - change)^8 (SVGF's cut, squared: the slow history is 32 frames, not 5), the slow
+//   history blended again with the current frame for that length, and both histories scaled
+//   towards the current level by the ratio of the means to the power min(1, 3 change);
 // - the clamp: the slow history into the fast one's mean +- clampSigma standard deviations, per
 //   channel; where that moved it, the history length is cut towards the fast history's in
 //   proportion to the move over the box's half width.
@@ -169,6 +169,7 @@ using DetailAccumulateConfidenceKernel = DetailAccumulate<true>;
 // luminance moments' variance over the history length).
 struct DetailClampKernel {
     GBufferView g;
+    Planes3 current;       // this frame's (demodulated, despeckled) radiance
     PlaneSet fastSums;     // ColorRowSumsKernel over the fast history, radius kRadius
     PlaneSet currentSums;  // LuminanceRowSumsKernel over this frame's radiance, radius kRadius
     Planes3 slow;          // in and out
@@ -208,8 +209,18 @@ struct DetailClampKernel {
                   log2Positive(maxf(currentMean, 1e-6f) / maxf(fastMean, 1e-6f));
         float p = exp2Negative(-absf(e));
         float ratio = change > 0.0f ? (e <= 0.0f ? p : 1.0f / p) : 1.0f;
-        h *= square(square(1.0f - change));
+        h *= square(square(square(1.0f - change)));
         Float3 c = c0 * ratio;
+        // The slow history was accumulated with weight 1 - 1/h0 (DetailAccumulate); the anti-lag
+        // blends it again with 1 - 1/h for the cut length h, so that the current frame carries
+        // the new lighting's pattern at once (a scaled history only keeps the old one's level).
+        const float hNew = maxf(h, 1.0f);
+        const float keep = h0 > 1.0f ? (1.0f - 1.0f / hNew) / (1.0f - 1.0f / h0) : 0.0f;
+        const Float3 now = current.load(i);
+        const Float3 reblended =
+            now * (1.0f / hNew) + (c0 - now * (1.0f / maxf(h0, 1.0f))) * (ratio * keep);
+        c = make3(change > 0.0f ? reblended.x : c.x, change > 0.0f ? reblended.y : c.y,
+                  change > 0.0f ? reblended.z : c.z);
         mean = mean * ratio;
         // The clamp to the fast history's box.
         Float3 half = fastWindow.sigma * (ratio * clampSigma);
@@ -239,6 +250,19 @@ struct DetailScaleKernel {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = layout.index(x, y);
         fast.store(i, fast.load(i) * lagScale[i]);
+    }
+};
+
+// The short-history estimate (SvgfVariance's colour, the temporal one elsewhere) written back
+// into the slow history, as ReLAX's history fix does: the next frames accumulate onto a
+// denoised start rather than onto one or two raw samples. Elsewhere the two are equal.
+struct DetailHistoryFixKernel {
+    Layout layout;
+    PlaneSet estimate;  // rgb + variance
+    Planes3 slow;       // out
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        PixelIndex i = layout.index(x, y);
+        slow.store(i, estimate.rgb().load(i));
     }
 };
 

@@ -313,6 +313,9 @@ struct SvgfVariance {
     PlaneSet out;  // rgb + variance (SvgfAccumulate's filterInput), revised in place
     SvgfTerms terms;
     float shortHistory;
+    // Above shortHistory: up to here the estimate is mixed with the temporal one, its share
+    // falling linearly to 0 (a spatial estimate switched off at once shows as a step of noise).
+    float fadeUntil = 0.0f;
     static constexpr int kRadius = kSvgfWindowRadius;  // unrolled
 
     // The history length is a bilinear mix of the taps' lengths: a pixel with 4 frames
@@ -320,7 +323,20 @@ struct SvgfVariance {
     // the decision the same on every back end.
     RTD_HOST_DEVICE RTD_INLINE bool active(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
-        return g.filterKey[i] >= 0 && length[i] < shortHistory - 1e-3f;  // an object's
+        return g.filterKey[i] >= 0 && length[i] < maxf(shortHistory, fadeUntil) - 1e-3f;
+    }
+    // temporal + (spatial - temporal) share, exact at the ends.
+    RTD_HOST_DEVICE RTD_INLINE static float mixByShare(float temporal, float spatial, float share) {
+        return share >= 1.0f   ? spatial
+               : share <= 0.0f ? temporal
+                               : temporal + (spatial - temporal) * share;
+    }
+    // The spatial estimate's share at history length h (1 below shortHistory).
+    RTD_HOST_DEVICE RTD_INLINE float spatialShare(float h) const {
+        return h < shortHistory - 1e-3f
+                   ? 1.0f
+                   : maxf(0.0f,
+                          minf(1.0f, (fadeUntil - h) / maxf(fadeUntil - shortHistory, 1e-3f)));
     }
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
@@ -374,13 +390,14 @@ struct SvgfVariance {
         float inv = 1.0f / sumW;  // >= 1, the centre's
         Float3 filtered = sum * inv;
         float variance = maxf(m2 * inv - square(m1 * inv), 0.0f) * (shortHistory / maxf(h, 1.0f));
-        if constexpr (!InterleavedGuide) {
-            // Per component (a selected vector would stop the CPU vectorising the kernel).
-            Float3 kept = out.rgb().load(i);
-            filtered = make3(isActive ? filtered.x : kept.x, isActive ? filtered.y : kept.y,
-                             isActive ? filtered.z : kept.z);
-            variance = isActive ? variance : out.at(3, i);
-        }
+        // Per component, by selects (a branch or a selected vector would stop the CPU
+        // vectorising the kernel). Inactive lanes (CPU) keep the temporal estimate: share 0.
+        const float share = isActive ? spatialShare(h) : 0.0f;
+        const Float3 kept = out.rgb().load(i);
+        filtered =
+            make3(mixByShare(kept.x, filtered.x, share), mixByShare(kept.y, filtered.y, share),
+                  mixByShare(kept.z, filtered.z, share));
+        variance = mixByShare(out.at(3, i), variance, share);
         out.rgb().store(i, filtered);
         out.at(3, i) = variance;
     }

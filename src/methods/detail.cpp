@@ -124,23 +124,28 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                   c.device().run(DetailClampStep{
                       {g, c.planes(fast), c.planeSet(f.windowSums), kWindow},
                       {g, c.planes(in), c.planeSet(currentSums), kWindow},
-                      {g, c.planeSet(f.windowSums), c.planeSet(currentSums), c.planes(slow),
-                       c.planeSet(moments), c.floats(length), c.planeSet(variance),
+                      {g, c.planes(in), c.planeSet(f.windowSums), c.planeSet(currentSums),
+                       c.planes(slow), c.planeSet(moments), c.floats(length), c.planeSet(variance),
                        c.floats(lagScale), d.clampSigma, float(d.fastHistory), antiLag ? 1 : 0},
                       {c.layout(), c.planes(fast), c.floats(lagScale)}});
               });
 
     // Short histories only (block-sparse): SVGF's 7x7 estimate of the variance and colour, with
-    // its wide luminance tolerance (there is no variance yet).
+    // its wide luminance tolerance (there is no variance yet), all of it at 1 frame, half at 2,
+    // none from 3 (switched off at once, it shows as a step of noise in the output). It is
+    // written back into the slow history (ReLAX's history fix): the next frames accumulate onto
+    // a denoised start rather than onto one or two raw samples.
     SvgfTerms wide = terms;
     wide.sigmaLuminance = 10.0f;
-    constexpr float kShortHistory = 3.0f;  // frames: below, estimate spatially
+    constexpr float kShortHistory = 1.0f, kSpatialUntil = 3.0f;  // frames: share 1 -> 0
     p.addPass(passPrefix + "variance", StepKind::SvgfVariance,
-              with(gbufferReads(f), {slow, moments, length, derivatives, variance}), {variance},
-              kSvgfWindowRadius, [=](const PassContext& c) {
+              with(gbufferReads(f), {slow, moments, length, derivatives, variance}),
+              {variance, slow}, kSvgfWindowRadius, [=](const PassContext& c) {
                   c.device().run(SvgfVarianceStep{
                       {gbuffer(c, f), c.planeSet(derivatives), c.planes(slow), c.planeSet(moments),
-                       c.floats(length), c.planeSet(variance), wide, kShortHistory}});
+                       c.floats(length), c.planeSet(variance), wide, kShortHistory, kSpatialUntil},
+                      {c.layout(), c.planeSet(variance), c.planes(slow)},
+                      true});
               });
 
     return declareGuidedIterations(p, f, passPrefix + "atrous", derivatives, variance,

@@ -53,6 +53,7 @@ namespace rtd {
     X(DetailAccumulateConfidenceKernel)   \
     X(DetailClampKernel)                  \
     X(DetailScaleKernel)                  \
+    X(DetailHistoryFixKernel)             \
     X(DetailSpecularReprojectKernel)      \
     X(DetailSplitKernel)                  \
     X(AddToOutputKernel)                  \
