@@ -61,6 +61,8 @@ void validate(const DenoiserSettings& s) {
     requireSigma(s.detail.sigmaLuminance, "detail-sigma-luminance");
     require(s.detail.iterations >= 1 && s.detail.iterations <= 10,
             "detail-iterations must be in [1, 10]");
+    require(s.detail.specularIterations >= 1 && s.detail.specularIterations <= 10,
+            "detail-specular-iterations must be in [1, 10]");
     require(s.detail.maxHistory >= 1 && s.detail.maxHistory <= 1000,
             "detail-max-history must be in [1, 1000]");
     require(s.detail.fastHistory >= 1 && s.detail.fastHistory <= s.detail.maxHistory,

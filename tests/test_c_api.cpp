@@ -282,6 +282,11 @@ TEST_F(CApi, BadMethodAndSettings) {
     EXPECT_NE(takeError(device_).message.find("svgf-iterations must be in [1, 10]"),
               std::string::npos);
     EXPECT_EQ(rtdGetInt(denoiser_, "svgf-iterations"), 5);
+    EXPECT_EQ(rtdGetInt(denoiser_, "detail-specular-iterations"), 1);
+    EXPECT_EQ(rtdSetInt(denoiser_, "detail-specular-iterations", 0), RTD_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(takeError(device_).message.find("detail-specular-iterations must be in [1, 10]"),
+              std::string::npos);
+    EXPECT_EQ(rtdSetInt(denoiser_, "detail-specular-iterations", 3), RTD_ERROR_NONE);
     EXPECT_EQ(rtdSetBool(denoiser_, "sigma-color", true), RTD_ERROR_INVALID_ARGUMENT);
     e = takeError(device_);
     EXPECT_NE(e.message.find("'sigma-color' is a float setting, not a bool one"), std::string::npos)

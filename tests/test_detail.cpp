@@ -221,8 +221,10 @@ TEST(DetailSplit, ZeroSpecularGivesTheCombinedResult) {
     std::vector<std::string> names;
     for (const PassInfo& p : split.passes()) names.push_back(p.name);
     for (const char* name : {"detail-split", "outlier-specular", "detail-specular-temporal",
-                             "detail-specular-atrous4", "add-specular"})
+                             "detail-specular-atrous0", "add-specular"})
         EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
+    // One A-Trous iteration on the specular signal (DetailSettings::specularIterations).
+    EXPECT_EQ(std::find(names.begin(), names.end(), "detail-specular-atrous1"), names.end());
 }
 
 TEST(DetailSplit, BothSignalsAddUpToAConstantBeauty) {

@@ -424,6 +424,9 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
         ->capture_default_str();
     c.add_option("--detail-iterations", s.detail.iterations, "[1,10] detail A-Trous iterations")
         ->capture_default_str();
+    c.add_option("--detail-specular-iterations", s.detail.specularIterations,
+                 "[1,10] detail A-Trous iterations of the specular signal (with a specular input)")
+        ->capture_default_str();
     c.add_option("--detail-max-history", s.detail.maxHistory,
                  "[1,1000] detail slow history length cap")
         ->capture_default_str();

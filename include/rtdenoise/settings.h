@@ -98,6 +98,8 @@ struct DetailSettings {
     float sigmaLuminance = 4.0f;  // [>=kMinSigma] luminance tolerance in standard deviations of
                                   // the accumulated mean
     int iterations = 5;           // [1, 10] A-Trous iterations, stride 2^i
+    int specularIterations = 1;   // [1, 10] A-Trous iterations of the split signal's specular
+                                  // part (its lobes are at most 0.45 rough: the history does most)
     int maxHistory = 32;          // [1, 1000] slow history cap (frames)
     int fastHistory = 6;          // [1, max-history] fast history cap (frames): the clamp's guide
     float clampSigma = 1.5f;      // [>=0] slow history clamped to the fast one's 5x5 mean +- this

@@ -186,6 +186,7 @@ const SettingEntry kSettings[] = {
     RTD_SETTING("detail-sigma-normal", Float, detail.sigmaNormal),
     RTD_SETTING("detail-sigma-luminance", Float, detail.sigmaLuminance),
     RTD_SETTING("detail-iterations", Int, detail.iterations),
+    RTD_SETTING("detail-specular-iterations", Int, detail.specularIterations),
     RTD_SETTING("detail-max-history", Int, detail.maxHistory),
     RTD_SETTING("detail-fast-history", Int, detail.fastHistory),
     RTD_SETTING("detail-clamp-sigma", Float, detail.clampSigma),

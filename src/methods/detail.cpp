@@ -148,9 +148,9 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                       true});
               });
 
-    return declareGuidedIterations(p, f, passPrefix + "atrous", derivatives, variance,
-                                   shared.filterA, shared.filterB, d.iterations, terms, -1, {},
-                                   toOutput);
+    return declareGuidedIterations(
+        p, f, passPrefix + "atrous", derivatives, variance, shared.filterA, shared.filterB,
+        specular ? d.specularIterations : d.iterations, terms, -1, {}, toOutput);
 }
 
 }  // namespace
