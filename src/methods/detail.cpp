@@ -4,7 +4,8 @@
 // max-history frames and a fast one of up to fast-history frames, to which the slow one is
 // clamped (lighting changes). The A-Trous iterations' luminance tolerance follows the variance
 // of the accumulated mean, so the filter narrows as a pixel's history grows; pixels with a short
-// history (disocclusions, lighting changes) get SVGF's 7x7 spatial estimate first.
+// history (disocclusions, lighting changes) get SVGF's 7x7 spatial estimate first, fading out over
+// the first 3 frames and written back into the history (ReLAX's history fix).
 //
 //   ingest -> [outlier] -> geometry -> detail-temporal -> detail-clamp -> detail-variance
 //          -> detail-atrous0 .. detail-atrous{iterations-1} (the last one modulated)
