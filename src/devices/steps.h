@@ -100,11 +100,11 @@ struct SvgfTemporalStageStep {
     bool clampRows = false;
 };
 
-// historyFix (hasHistoryFix): the estimate then written back into the history (detail).
+// historyFix (where its slow history is set): the estimate then written back into the history
+// (detail).
 struct SvgfVarianceStep {
     SvgfVarianceKernel variance;
     DetailHistoryFixKernel historyFix = {};
-    bool hasHistoryFix = false;
 };
 
 // Modulated: writes the result times the albedo into the output instead of `out`.

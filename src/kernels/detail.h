@@ -255,11 +255,17 @@ struct DetailScaleKernel {
 
 // The short-history estimate (SvgfVariance's colour, the temporal one elsewhere) written back
 // into the slow history, as ReLAX's history fix does: the next frames accumulate onto a
-// denoised start rather than onto one or two raw samples. Elsewhere the two are equal.
+// denoised start rather than onto one or two raw samples. Block-sparse on the CPU (pixels whose
+// history is shorter than `below`); elsewhere the two are equal, so every pixel may copy.
 struct DetailHistoryFixKernel {
     Layout layout;
     PlaneSet estimate;  // rgb + variance
-    Planes3 slow;       // out
+    Planes3 slow;       // out; data null: no history fix
+    const float* length;
+    float below;  // SvgfVariance's fadeUntil
+    RTD_HOST_DEVICE RTD_INLINE bool active(int x, int y) const {
+        return length[layout.index(x, y)] < below;
+    }
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = layout.index(x, y);
         slow.store(i, estimate.rgb().load(i));

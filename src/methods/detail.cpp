@@ -145,8 +145,8 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                   c.device().run(SvgfVarianceStep{
                       {gbuffer(c, f), c.planeSet(derivatives), c.planes(slow), c.planeSet(moments),
                        c.floats(length), c.planeSet(variance), wide, kShortHistory, kSpatialUntil},
-                      {c.layout(), c.planeSet(variance), c.planes(slow)},
-                      true});
+                      {c.layout(), c.planeSet(variance), c.planes(slow), c.floats(length),
+                       kSpatialUntil}});
               });
 
     return declareGuidedIterations(

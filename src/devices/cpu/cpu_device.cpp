@@ -119,7 +119,7 @@ class CpuDevice final : public Device {
             launch(svgfVarianceForm<kPaperSigmaNormal, false>(s.variance));
         else
             launch(s.variance);
-        if (s.hasHistoryFix) launch(s.historyFix);
+        if (s.historyFix.slow.data) launch(s.historyFix);
     }
     void run(const SvgfAtrousIterationStep& s) override {
         const bool sigma128 = hasPaperSigmaNormal(s.iteration.terms);

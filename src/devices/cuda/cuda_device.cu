@@ -309,7 +309,7 @@ class CudaDevice final : public Device {
     // log2 is one instruction here: max(0, n.n')^sigma as exp2(sigma log2(n.n')) for any sigma.
     void run(const SvgfVarianceStep& s) override {
         interleaved_ ? launch(svgfVarianceForm<-1, true>(s.variance)) : launch(s.variance);
-        if (s.hasHistoryFix) launch(s.historyFix);
+        if (s.historyFix.slow.data) launch(s.historyFix);
     }
     void run(const SvgfAtrousIterationStep& s) override {
         const SvgfAtrousModulatedKernel& k = s.iteration;
