@@ -41,6 +41,28 @@ TEST_P(CpuIsaTest, AgreesWithTheScalarKernels) {
     }
 }
 
+// The split signal's kernels (DetailSplit, the specular reprojection with its virtual motion) on
+// the reflection scene rendered with the split inputs.
+TEST_P(CpuIsaTest, AgreesWithTheScalarKernelsOnTheSplitSignal) {
+    CpuIsa isa = GetParam();
+    if (int(isa) > int(bestCpuInstructionSet()))
+        GTEST_SKIP() << toString(isa) << ": not supported by this processor or build (best: "
+                     << toString(bestCpuInstructionSet()) << ")";
+    static const std::vector<Frame> frames =
+        test::renderSmallSequence("reflections", 96, 64, 4, true);
+    ASSERT_TRUE(frames[0].specular && frames[0].roughness && frames[0].hitDistance);
+    DenoiserSettings s;
+    s.method = Method::Detail;
+    s.device = DeviceType::Cpu;
+    Denoiser scalar = makeTunedDenoiser(s, {CpuIsa::Scalar});
+    Denoiser vector = makeTunedDenoiser(s, {isa});
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        Image a = scalar.processFrame(frames[i]);
+        Image b = vector.processFrame(frames[i]);
+        EXPECT_LE(test::maxRelativeDifference(a, b), 1e-3) << toString(isa) << ", frame " << i;
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(EverySet, CpuIsaTest,
                          testing::Values(CpuIsa::Sse2, CpuIsa::Avx2, CpuIsa::Avx512),
                          [](const testing::TestParamInfo<CpuIsa>& info) {

@@ -177,7 +177,8 @@ void runDetailTemporalStep(const DetailTemporalStageStep& s, PlaneSet history, L
     launch(DetailReprojectSearchKernel{r.g, r.previous, r.objects, r.objectCount, r.derivatives,
                                        r.test, r.previousSlow, r.previousFast, r.previousMoments,
                                        r.previousLength, r.history, r.validity, r.hasHistory});
-    if (s.hasSpecular) {
+    // Without a history or objects, nothing to follow (and no object to read).
+    if (s.hasSpecular && r.hasHistory && s.specular.objectCount > 0) {
         DetailSpecularReprojectKernel specular = s.specular;
         specular.history = history;
         launch(specular);

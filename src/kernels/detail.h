@@ -282,13 +282,18 @@ RTD_HOST_DEVICE RTD_INLINE float finiteNonNegative(float v) {
 // The ingest's demodulated beauty into its two signals: the diffuse one (beauty - specular,
 // demodulated: noisy - specular / albedo, written in place) and the specular one (not
 // demodulated: its colour is the lobe's, not the texture's).
+// Also the lobe's roughness and hit distance, read once here into planes (lobe) for
+// DetailSpecularReproject (a caller's buffer's per-pixel type switch would keep that kernel's
+// CPU loop scalar).
 struct DetailSplitKernel {
     Layout layout;
     Planes3 noisy;   // in: beauty / albedo; out: the diffuse signal
     Planes3 albedo;  // the ingest's factor (floored at its epsilon, 1 on background)
     InputSpan specular;
     InputSpan roughness;
+    InputSpan hitDistance;  // data null: none
     Planes3 specularOut;
+    PlaneSet lobe;  // out: roughness in [0, 1] (NaN: 1), hit distance (0: none or not finite)
     // A rough lobe's reflection is as blurred as the diffuse light: between these roughnesses it
     // goes over into the diffuse signal, whose history and filter it then shares (filtered
     // apart, a rough lobe's 1-spp samples add noise: docs/quality.md).
@@ -309,6 +314,8 @@ struct DetailSplitKernel {
         noisy.store(i, make3(maxf(n.x - s.x / a.x, 0.0f), maxf(n.y - s.y / a.y, 0.0f),
                              maxf(n.z - s.z / a.z, 0.0f)));
         specularOut.store(i, s);
+        lobe.at(0, i) = r >= 0.0f ? minf(r, 1.0f) : (r < 0.0f ? 0.0f : 1.0f);
+        lobe.at(1, i) = hitDistance.data ? finiteNonNegative(hitDistance.load(x, y, 0)) : 0.0f;
     }
 };
 
@@ -319,7 +326,9 @@ struct DetailSplitKernel {
 // object's matrix, and the history taken there where the previous frame shows the same object
 // with a like normal ("virtual motion", exact for a planar mirror). Elsewhere the surface's
 // history stays, its length capped by the parallax: a reflection drifts over its surface as the
-// view moves, the less so the rougher the lobe.
+// view moves, the less so the rougher the lobe. Run where the frame has a history and objects.
+// Branch-free (every pixel computes both ways; selects pick what is stored) over runs of one
+// object (KeyedRuns, as DetailReproject), so the CPU vectorises it.
 struct DetailSpecularReprojectKernel {
     GBufferView g;
     PreviousGeometry previous;
@@ -330,10 +339,10 @@ struct DetailSpecularReprojectKernel {
     const float* previousLength;
     PlaneSet history;  // in: DetailReproject's; out: the reflection's where it holds, capped
     std::uint8_t* validity;
-    InputSpan roughness, hitDistance;  // hitDistance data null: none
+    PlaneSet lobe;  // DetailSplit's: roughness, hit distance
+    int hasHitDistance;
     Float3 cameraPosition;
     float maxHistory;
-    int hasHistory;
     // Surface history frames kept per pixel of parallax at roughness 0 (x (1 - r)^2).
     static constexpr float kParallaxFrames = 8.0f;
     static constexpr float kNormalAgreement = 0.9f;  // cosine between now and then
@@ -347,74 +356,87 @@ struct DetailSpecularReprojectKernel {
         Float3 dn = g.normal.load(j) - g.normal.load(i);
         Float3 dp = g.position.load(j) - g.position.load(i);
         float dp2 = dot(dp, dp);
-        return same && dp2 > 0.0f ? std::sqrt(dot(dn, dn) / dp2) : 0.0f;
+        return same && dp2 > 0.0f ? std::sqrt(dot(dn, dn) / maxf(dp2, 1e-30f)) : 0.0f;
     }
 
-    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+    RTD_HOST_DEVICE RTD_INLINE std::int32_t runKey(int x, int y) const {
+        return g.objectId[g.layout.index(x, y)];
+    }
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const { pixel<false>(x, y, 0); }
+    template <bool KnownId>
+    RTD_HOST_DEVICE RTD_INLINE void pixel(int x, int y, std::int32_t knownId) const {
         const Layout& L = g.layout;
-        PixelIndex i = L.index(x, y);
-        std::int32_t id = g.objectId[i];
-        if (id < 0 || id >= objectCount || !hasHistory) return;
-        const ObjectReprojection& object = objects[id];
-        if (!object.valid) return;
-        float r = roughness.load(x, y, 0);
-        r = r >= 0.0f ? minf(r, 1.0f) : (r < 0.0f ? 0.0f : 1.0f);  // NaN: rough
-        Float3 position = g.position.load(i);
+        const PixelIndex i = L.index(x, y);
+        const std::int32_t id = KnownId ? knownId : g.objectId[i];
+        // An ID the matrices do not cover reads object 0, then keeps its history.
+        const bool covered = id >= 0 && id < objectCount;
+        const ObjectReprojection& object = objects[covered ? id : 0];
+        const bool live = covered && object.valid;
+        const float r = lobe.at(0, i);
+        const Float3 position = g.position.load(i);
         // Where the surface was (the parallax is measured against it).
-        Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
-        float surfaceX = s.x / (s.w > 0.0f ? s.w : 1.0f) - 0.5f;
-        float surfaceY = s.y / (s.w > 0.0f ? s.w : 1.0f) - 0.5f;
-        float distance = hitDistance.data ? finiteNonNegative(hitDistance.load(x, y, 0)) : 0.0f;
-        bool followed = false;
-        float parallax = std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
-        if (distance > 0.0f && !previous.fromMotion) {
-            // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at
-            // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
-            // a sphere's reflection moves almost with its surface.
-            float k = maxf(curvatureAt(i, 1), curvatureAt(i, L.pitch));
-            float focal = 0.5f / maxf(k, 1e-6f);
-            distance = distance * focal / (distance + focal);
-            Float3 view = normalize(position - cameraPosition);
-            Float4 v =
-                transformPoint(object.currentWorldToPreviousScreen, position + view * distance);
-            float vx = v.x / (v.w > 0.0f ? v.w : 1.0f) - 0.5f;
-            float vy = v.y / (v.w > 0.0f ? v.w : 1.0f) - 0.5f;
-            bool onScreen = v.w > 0.0f && vx > -1.0f && vx < float(L.width) && vy > -1.0f &&
-                            vy < float(L.height);
-            if (onScreen) {
-                Float3 expectedNormal = normalize(
-                    transformVector(object.currentWorldToPreviousWorld, g.normal.load(i)));
-                float fx = std::floor(vx), fy = std::floor(vy);
-                int x0 = int(fx), y0 = int(fy);
-                float ax = vx - fx, ay = vy - fy;
-                HistoryTaps<4> taps;
-                float total = 0.0f;
-                RTD_UNROLL
-                for (int t = 0; t < 4; ++t) {
-                    PixelIndex j = L.index(x0 + (t & 1), y0 + (t >> 1));
-                    Float3 n = previous.normal.load(j);
-                    bool ok =
-                        previous.objectId[j] == id && dot(n, expectedNormal) > kNormalAgreement;
-                    float w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
-                    taps.index[t] = j;
-                    taps.weight[t] = ok ? w : 0.0f;
-                    total += taps.weight[t];
-                }
-                if (total > 1e-3f) {
-                    RTD_UNROLL
-                    for (int t = 0; t < 4; ++t) taps.weight[t] /= total;
-                    DetailHistorySample h = gatherDetailHistory(taps, previousSlow, previousFast,
-                                                                previousMoments, previousLength);
-                    DetailReproject<false>::store(history, i, h);
-                    validity[i] = kReprojectionValid;
-                    followed = true;
-                }
-            }
+        const Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
+        const float inverseS = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
+        const float surfaceX = s.x * inverseS - 0.5f, surfaceY = s.y * inverseS - 0.5f;
+        const float parallax =
+            std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
+        // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at
+        // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
+        // a sphere's reflection moves almost with its surface.
+        float distance = hasHitDistance ? lobe.at(1, i) : 0.0f;
+        const float k = maxf(curvatureAt(i, 1), curvatureAt(i, L.pitch));
+        const float focal = 0.5f / maxf(k, 1e-6f);
+        distance = distance * focal / (distance + focal);
+        const Float3 view = normalize(position - cameraPosition);
+        const Float4 v =
+            transformPoint(object.currentWorldToPreviousScreen, position + view * distance);
+        const float inverseV = 1.0f / (v.w > 0.0f ? v.w : 1.0f);
+        float vx = v.x * inverseV - 0.5f, vy = v.y * inverseV - 0.5f;
+        const bool onScreen = live && distance > 0.0f && !previous.fromMotion && v.w > 0.0f &&
+                              vx > -1.0f && vx < float(L.width) && vy > -1.0f &&
+                              vy < float(L.height);
+        vx = onScreen ? vx : 0.0f;  // in range (NaN too) before the conversion to int
+        vy = onScreen ? vy : 0.0f;
+        const Float3 expectedNormal =
+            normalize(transformVector(object.currentWorldToPreviousWorld, g.normal.load(i)));
+        const float fx = std::floor(vx), fy = std::floor(vy);
+        const int x0 = int(fx), y0 = int(fy);
+        const float ax = vx - fx, ay = vy - fy;
+        HistoryTaps<4> taps;
+        float total = 0.0f;
+        RTD_UNROLL
+        for (int t = 0; t < 4; ++t) {
+            PixelIndex j = L.index(x0 + (t & 1), y0 + (t >> 1));
+            Float3 n = previous.normal.load(j);
+            bool ok = onScreen && previous.objectId[j] == id &&
+                      dot(n, expectedNormal) > kNormalAgreement;
+            float w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
+            taps.index[t] = j;
+            taps.weight[t] = ok ? w : 0.0f;
+            total += taps.weight[t];
         }
-        if (!followed) {
-            float cap = maxHistory / (1.0f + kParallaxFrames * parallax * square(1.0f - r));
-            history.at(8, i) = minf(history.at(8, i), maxf(cap - 1.0f, 0.0f));
-        }
+        const bool followed = total > 1e-3f;
+        const float inverseTotal = 1.0f / maxf(total, 1e-3f);
+        RTD_UNROLL
+        for (int t = 0; t < 4; ++t) taps.weight[t] *= inverseTotal;
+        const DetailHistorySample reflected = gatherDetailHistory(
+            taps, previousSlow, previousFast, previousMoments, previousLength);
+        DetailHistorySample surface = DetailReprojectKernel::load(history, i);
+        const float cap = maxHistory / (1.0f + kParallaxFrames * parallax * square(1.0f - r));
+        surface.length = live ? minf(surface.length, maxf(cap - 1.0f, 0.0f)) : surface.length;
+        // Per component (a selected structure would stop the CPU vectorising the kernel).
+        DetailHistorySample out;
+        out.slow = make3(followed ? reflected.slow.x : surface.slow.x,
+                         followed ? reflected.slow.y : surface.slow.y,
+                         followed ? reflected.slow.z : surface.slow.z);
+        out.fast = make3(followed ? reflected.fast.x : surface.fast.x,
+                         followed ? reflected.fast.y : surface.fast.y,
+                         followed ? reflected.fast.z : surface.fast.z);
+        out.mean = followed ? reflected.mean : surface.mean;
+        out.variance = followed ? reflected.variance : surface.variance;
+        out.length = followed ? reflected.length : surface.length;
+        DetailReprojectKernel::store(history, i, out);
+        validity[i] = followed ? std::uint8_t(kReprojectionValid) : validity[i];
     }
 };
 

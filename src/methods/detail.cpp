@@ -20,6 +20,7 @@
 //             distance is given, else the surface's, capped by parallax and roughness)
 //             .. detail-specular-atrous{last} -> add-specular
 #include <cctype>
+#include <vector>
 #include <string>
 
 #include "methods/method.h"
@@ -31,6 +32,7 @@ namespace {
 // What both signals' passes use in turn (frame lifetime).
 struct SharedImages {
     ResourceId derivatives, variance, filterA, filterB, validity, lagScale, currentSums;
+    ResourceId lobe;  // the split signal's: roughness, hit distance (DetailSplitKernel)
 };
 
 // One signal's histories and passes, from its despeckled image `in` to its filtered image (the
@@ -57,9 +59,12 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     const SvgfTerms terms{d.sigmaDepth, d.sigmaNormal, d.sigmaLuminance};
 
     const HistoryTest test = historyTest(settings.history);
+    std::vector<ResourceId> temporalReads =
+        with(reprojectionReads(p, f), {derivatives, previous(slow), previous(fast),
+                                       previous(moments), previous(length), in});
+    if (specular) temporalReads.push_back(shared.lobe);
     p.addPass(passPrefix + "temporal", StepKind::DetailTemporalStage,
-              with(reprojectionReads(p, f), {derivatives, previous(slow), previous(fast),
-                                             previous(moments), previous(length), in}),
+              temporalReads,
               {slow, fast, moments, length, validity}, 2, [=](const PassContext& c) {
                   GBufferView g = gbuffer(c, f);
                   const FrameBinding& frame = c.frame();
@@ -102,11 +107,10 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                                        c.floats(previous(length)),
                                        {},
                                        c.bytes(validity),
-                                       frame.roughness,
-                                       frame.hitDistance,
+                                       c.planeSet(shared.lobe),
+                                       frame.hitDistance.data ? 1 : 0,
                                        frame.cameraPosition,
-                                       float(d.maxHistory),
-                                       frame.hasHistory};
+                                       float(d.maxHistory)};
                   }
                   c.device().run(step);
               });
@@ -159,14 +163,16 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
 FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
                           const MethodInputs& inputs) {
     FrameImages f = declareIngest(p, settings);
-    ResourceId specularNoisy;
+    ResourceId specularNoisy, lobe;
     if (inputs.specular) {
         specularNoisy = p.declare(floatImage("specularNoisy", 3));
+        lobe = p.declare(floatImage("specularLobe", 2));
         p.addPass("detail-split", StepKind::DetailSplit, {p.frame(), f.noisy, f.albedo},
-                  {f.noisy, specularNoisy}, 0, [f, specularNoisy](const PassContext& c) {
+                  {f.noisy, specularNoisy, lobe}, 0, [f, specularNoisy, lobe](const PassContext& c) {
+                      const FrameBinding& frame = c.frame();
                       DetailSplitStep step{{c.layout(), c.planes(f.noisy), c.planes(f.albedo),
-                                            c.frame().specular, c.frame().roughness,
-                                            c.planes(specularNoisy)}};
+                                            frame.specular, frame.roughness, frame.hitDistance,
+                                            c.planes(specularNoisy), c.planeSet(lobe)}};
                       c.device().run(step);
                   });
     }
@@ -186,6 +192,7 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
     shared.validity = declareValidity(p);
     shared.lagScale = p.declare(floatImage("lagScale", 1));
     shared.currentSums = p.declare(floatImage("currentSums", 3));
+    shared.lobe = lobe;
 
     const ResourceId derivatives = shared.derivatives;
     p.addPass("geometry", StepKind::Geometry, gbufferReads(f), {derivatives}, 2,
