@@ -157,7 +157,7 @@ using DetailAccumulateConfidenceKernel = DetailAccumulate<true>;
 // History clamping, anti-lag and the A-Trous input, over each pixel's 5x5 window of object
 // pixels (window sums of the fast history and of the current frame's luminance):
 // - anti-lag (antiLag): where the current frame's mean differs from the fast history's by more
-//   than 3 standard errors of the current mean, the lighting changed. The history length is
+//   than 2 standard errors of the current mean, the lighting changed. The history length is
 //   cut by (1 - change)^8 (SVGF's cut, squared: the slow history is 32 frames, not 5), the slow
 //   history blended again with the current frame for that length, and both histories scaled
 //   towards the current level by the ratio of the means to the power min(1, 3 change);
@@ -173,13 +173,17 @@ struct DetailClampKernel {
     PlaneSet fastSums;     // ColorRowSumsKernel over the fast history, radius kRadius
     PlaneSet currentSums;  // LuminanceRowSumsKernel over this frame's radiance, radius kRadius
     Planes3 slow;          // in and out
-    PlaneSet moments;
-    float* length;      // in and out
-    PlaneSet filterIn;  // out: rgb + variance
-    float* lagScale;    // out: the anti-lag's colour ratio (1: none), for the fast history
-    float clampSigma;   // 0: no clamp
+    PlaneSet moments;      // in and out
+    float* length;         // in and out
+    PlaneSet filterIn;     // out: rgb + variance
+    float* lagScale;       // out: the anti-lag's colour ratio (1: none), for the fast history
+    float clampSigma;      // 0: no clamp
     float fastHistory;
-    int antiLag;  // 1: on
+    float momentsAlpha;  // DetailAccumulate's
+    int antiLag;         // 1: on
+    // The anti-lag's threshold in standard errors of the current 5x5 mean: 3 missed most of a
+    // light switched on (a bright 1-spp frame's noise hid the jump; docs/quality.md).
+    static constexpr float kLagStandardErrors = 2.0f;
     static constexpr int kRadius = 2;
 
     // Branch-free (every pixel computes every term; selects pick the outputs) so the CPU
@@ -198,10 +202,12 @@ struct DetailClampKernel {
             columnSum<kNarrowWindow>(currentSums, 2, i, L.pitch, kRadius) / n;
         Float3 mean = fastWindow.mean;
         float h = h0;
-        // Anti-lag: the change beyond 3 standard errors of the current mean, relative.
+        // Anti-lag: the change beyond kLagStandardErrors standard errors of the current mean,
+        // relative.
         float currentSigma = std::sqrt(maxf(currentSquares - square(currentMean), 0.0f));
         float fastMean = luminance(mean);
-        float gap = maxf(absf(currentMean - fastMean) - 3.0f * currentSigma / std::sqrt(n), 0.0f);
+        float gap = maxf(
+            absf(currentMean - fastMean) - kLagStandardErrors * currentSigma / std::sqrt(n), 0.0f);
         float change = antiLag ? minf(gap / maxf(maxf(currentMean, fastMean), 1e-4f), 1.0f) : 0.0f;
         // (current / fast)^min(1, 3 change) as 2^(e log2 r): exp2Negative of -|e| and, for a
         // positive e, its reciprocal.
@@ -221,6 +227,22 @@ struct DetailClampKernel {
             now * (1.0f / hNew) + (c0 - now * (1.0f / maxf(h0, 1.0f))) * (ratio * keep);
         c = make3(change > 0.0f ? reblended.x : c.x, change > 0.0f ? reblended.y : c.y,
                   change > 0.0f ? reblended.z : c.z);
+        // The luminance moments likewise: those from before this frame's accumulation (whose
+        // weight was am0) are recovered, scaled to the new level and accumulated again with the
+        // cut length's weight. Kept as they were, they hold the change itself as variance, and
+        // the next frames' filter blurs over edges by it.
+        const float lum = luminance(now);
+        const float m1 = moments.at(0, i), v1 = moments.at(1, i);
+        const float am0 = maxf(momentsAlpha, 1.0f / maxf(h0, 1.0f));
+        const float keepMoments = maxf(1.0f - am0, 1e-3f);
+        const float m0Before = (m1 - am0 * lum) / keepMoments;
+        const float v0Before = maxf(v1 / keepMoments - am0 * square(lum - m0Before), 0.0f);
+        const float m0 = m0Before * ratio, v0 = v0Before * (ratio * ratio);
+        const float am1 = maxf(momentsAlpha, 1.0f / hNew), dm = lum - m0;
+        const bool recover = change > 0.0f && 1.0f - am0 > 1e-3f;
+        const float meanAfter = recover ? m0 + am1 * dm : (change > 0.0f ? lum : m1);
+        const float varianceAfter =
+            recover ? (1.0f - am1) * (v0 + am1 * dm * dm) : (change > 0.0f ? 0.0f : v1);
         mean = mean * ratio;
         // The clamp to the fast history's box.
         Float3 half = fastWindow.sigma * (ratio * clampSigma);
@@ -237,7 +259,9 @@ struct DetailClampKernel {
         length[i] = h;
         lagScale[i] = object ? ratio : 1.0f;
         filterIn.rgb().store(i, c);
-        filterIn.at(3, i) = object ? moments.at(1, i) / h : 0.0f;
+        moments.at(0, i) = object ? meanAfter : m1;
+        moments.at(1, i) = object ? varianceAfter : v1;
+        filterIn.at(3, i) = object ? varianceAfter / h : 0.0f;
     }
 };
 
@@ -378,8 +402,7 @@ struct DetailSpecularReprojectKernel {
         const Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
         const float inverseS = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
         const float surfaceX = s.x * inverseS - 0.5f, surfaceY = s.y * inverseS - 0.5f;
-        const float parallax =
-            std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
+        const float parallax = std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
         // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at
         // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
         // a sphere's reflection moves almost with its surface.
@@ -408,8 +431,8 @@ struct DetailSpecularReprojectKernel {
         for (int t = 0; t < 4; ++t) {
             PixelIndex j = L.index(x0 + (t & 1), y0 + (t >> 1));
             Float3 n = previous.normal.load(j);
-            bool ok = onScreen && previous.objectId[j] == id &&
-                      dot(n, expectedNormal) > kNormalAgreement;
+            bool ok =
+                onScreen && previous.objectId[j] == id && dot(n, expectedNormal) > kNormalAgreement;
             float w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
             taps.index[t] = j;
             taps.weight[t] = ok ? w : 0.0f;
@@ -419,8 +442,8 @@ struct DetailSpecularReprojectKernel {
         const float inverseTotal = 1.0f / maxf(total, 1e-3f);
         RTD_UNROLL
         for (int t = 0; t < 4; ++t) taps.weight[t] *= inverseTotal;
-        const DetailHistorySample reflected = gatherDetailHistory(
-            taps, previousSlow, previousFast, previousMoments, previousLength);
+        const DetailHistorySample reflected =
+            gatherDetailHistory(taps, previousSlow, previousFast, previousMoments, previousLength);
         DetailHistorySample surface = DetailReprojectKernel::load(history, i);
         const float cap = maxHistory / (1.0f + kParallaxFrames * parallax * square(1.0f - r));
         surface.length = live ? minf(surface.length, maxf(cap - 1.0f, 0.0f)) : surface.length;

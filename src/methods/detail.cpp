@@ -20,8 +20,8 @@
 //             distance is given, else the surface's, capped by parallax and roughness)
 //             .. detail-specular-atrous{last} -> add-specular
 #include <cctype>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include "methods/method.h"
 
@@ -59,12 +59,11 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     const SvgfTerms terms{d.sigmaDepth, d.sigmaNormal, d.sigmaLuminance};
 
     const HistoryTest test = historyTest(settings.history);
-    std::vector<ResourceId> temporalReads =
-        with(reprojectionReads(p, f), {derivatives, previous(slow), previous(fast),
-                                       previous(moments), previous(length), in});
+    std::vector<ResourceId> temporalReads = with(
+        reprojectionReads(p, f),
+        {derivatives, previous(slow), previous(fast), previous(moments), previous(length), in});
     if (specular) temporalReads.push_back(shared.lobe);
-    p.addPass(passPrefix + "temporal", StepKind::DetailTemporalStage,
-              temporalReads,
+    p.addPass(passPrefix + "temporal", StepKind::DetailTemporalStage, temporalReads,
               {slow, fast, moments, length, validity}, 2, [=](const PassContext& c) {
                   GBufferView g = gbuffer(c, f);
                   const FrameBinding& frame = c.frame();
@@ -120,20 +119,21 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     // (free after the firefly removal).
     constexpr int kWindow = DetailClampKernel::kRadius;
     const ResourceId lagScale = shared.lagScale, currentSums = shared.currentSums;
-    p.addPass(passPrefix + "clamp", StepKind::DetailClamp,
-              with(gbufferReads(f), {in, fast, slow, moments, length}),
-              {fast, slow, length, variance, lagScale, f.windowSums, currentSums}, kNarrowWindow,
-              [=](const PassContext& c) {
-                  const GBufferView g = gbuffer(c, f);
-                  const bool antiLag = d.antiLag;
-                  c.device().run(DetailClampStep{
-                      {g, c.planes(fast), c.planeSet(f.windowSums), kWindow},
-                      {g, c.planes(in), c.planeSet(currentSums), kWindow},
-                      {g, c.planes(in), c.planeSet(f.windowSums), c.planeSet(currentSums),
-                       c.planes(slow), c.planeSet(moments), c.floats(length), c.planeSet(variance),
-                       c.floats(lagScale), d.clampSigma, float(d.fastHistory), antiLag ? 1 : 0},
-                      {c.layout(), c.planes(fast), c.floats(lagScale)}});
-              });
+    p.addPass(
+        passPrefix + "clamp", StepKind::DetailClamp,
+        with(gbufferReads(f), {in, fast, slow, moments, length}),
+        {fast, slow, moments, length, variance, lagScale, f.windowSums, currentSums}, kNarrowWindow,
+        [=](const PassContext& c) {
+            const GBufferView g = gbuffer(c, f);
+            const bool antiLag = d.antiLag;
+            c.device().run(DetailClampStep{
+                {g, c.planes(fast), c.planeSet(f.windowSums), kWindow},
+                {g, c.planes(in), c.planeSet(currentSums), kWindow},
+                {g, c.planes(in), c.planeSet(f.windowSums), c.planeSet(currentSums), c.planes(slow),
+                 c.planeSet(moments), c.floats(length), c.planeSet(variance), c.floats(lagScale),
+                 d.clampSigma, float(d.fastHistory), d.momentsAlpha, antiLag ? 1 : 0},
+                {c.layout(), c.planes(fast), c.floats(lagScale)}});
+        });
 
     // Short histories only (block-sparse): SVGF's 7x7 estimate of the variance and colour, with
     // its wide luminance tolerance (there is no variance yet), all of it at 1 frame, half at 2,
@@ -168,7 +168,8 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
         specularNoisy = p.declare(floatImage("specularNoisy", 3));
         lobe = p.declare(floatImage("specularLobe", 2));
         p.addPass("detail-split", StepKind::DetailSplit, {p.frame(), f.noisy, f.albedo},
-                  {f.noisy, specularNoisy, lobe}, 0, [f, specularNoisy, lobe](const PassContext& c) {
+                  {f.noisy, specularNoisy, lobe}, 0,
+                  [f, specularNoisy, lobe](const PassContext& c) {
                       const FrameBinding& frame = c.frame();
                       DetailSplitStep step{{c.layout(), c.planes(f.noisy), c.planes(f.albedo),
                                             frame.specular, frame.roughness, frame.hitDistance,
