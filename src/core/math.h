@@ -79,6 +79,11 @@ RTD_HOST_DEVICE RTD_INLINE float absf(float x) {
 RTD_HOST_DEVICE RTD_INLINE Float3 clamp3(Float3 v, Float3 lo, Float3 hi) {
     return {clampf(v.x, lo.x, hi.x), clampf(v.y, lo.y, hi.y), clampf(v.z, lo.z, hi.z)};
 }
+// a where pick, else b, per component: a selected structure would stop the CPU vectorising
+// the kernel that uses it.
+RTD_HOST_DEVICE RTD_INLINE Float3 select3(bool pick, Float3 a, Float3 b) {
+    return {pick ? a.x : b.x, pick ? a.y : b.y, pick ? a.z : b.z};
+}
 RTD_HOST_DEVICE RTD_INLINE float luminance(Float3 c) {
     return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
 }

@@ -92,12 +92,16 @@ struct InputSpan {
     }
 };
 
+// v clamped to [0, 1], NaN read as 1.
+RTD_HOST_DEVICE RTD_INLINE float unitNanAsOne(float v) {
+    return v >= 0.0f ? (v < 1.0f ? v : 1.0f) : (v < 0.0f ? 0.0f : 1.0f);
+}
+
 // The caller's history confidence (FrameBinding::confidence, its first channel) at (x, y), as
 // the kernels should read it: clamped to [0, 1], NaN as 1 (as if none were given), 1 when absent.
 RTD_HOST_DEVICE RTD_INLINE float loadConfidence(const InputSpan& confidence, int x, int y) {
     if (!confidence.data) return 1.0f;
-    const float v = confidence.load(x, y, 0);
-    return v >= 0.0f ? (v < 1.0f ? v : 1.0f) : (v < 0.0f ? 0.0f : 1.0f);
+    return unitNanAsOne(confidence.load(x, y, 0));
 }
 
 // An image of the caller's as packed floats (`channels` per pixel: the first ones of the input,

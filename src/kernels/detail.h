@@ -225,8 +225,7 @@ struct DetailClampKernel {
         const Float3 now = current.load(i);
         const Float3 reblended =
             now * (1.0f / hNew) + (c0 - now * (1.0f / maxf(h0, 1.0f))) * (ratio * keep);
-        c = make3(change > 0.0f ? reblended.x : c.x, change > 0.0f ? reblended.y : c.y,
-                  change > 0.0f ? reblended.z : c.z);
+        c = select3(change > 0.0f, reblended, c);
         // The luminance moments likewise: those from before this frame's accumulation (whose
         // weight was am0) are recovered, scaled to the new level and accumulated again with the
         // cut length's weight. Kept as they were, they hold the change itself as variance, and
@@ -239,10 +238,10 @@ struct DetailClampKernel {
         const float v0Before = maxf(v1 / keepMoments - am0 * square(lum - m0Before), 0.0f);
         const float m0 = m0Before * ratio, v0 = v0Before * (ratio * ratio);
         const float am1 = maxf(momentsAlpha, 1.0f / hNew), dm = lum - m0;
+        // (At am0 = 1 the accumulation kept nothing of them, and m1, v1 are already lum, 0.)
         const bool recover = change > 0.0f && 1.0f - am0 > 1e-3f;
-        const float meanAfter = recover ? m0 + am1 * dm : (change > 0.0f ? lum : m1);
-        const float varianceAfter =
-            recover ? (1.0f - am1) * (v0 + am1 * dm * dm) : (change > 0.0f ? 0.0f : v1);
+        const float meanAfter = recover ? m0 + am1 * dm : m1;
+        const float varianceAfter = recover ? (1.0f - am1) * (v0 + am1 * dm * dm) : v1;
         mean = mean * ratio;
         // The clamp to the fast history's box.
         Float3 half = fastWindow.sigma * (ratio * clampSigma);
@@ -250,10 +249,9 @@ struct DetailClampKernel {
         float moved = absf(luminance(clamped) - luminance(c));
         float t = clampSigma > 0.0f ? minf(moved / (luminance(half) + 1e-6f), 1.0f) : 0.0f;
         h = minf(h, h + (minf(h, fastHistory) - h) * t);
-        // Per component (a selected vector would stop the CPU vectorising the kernel).
         const bool clamp = clampSigma > 0.0f;
-        c = make3(clamp ? clamped.x : c.x, clamp ? clamped.y : c.y, clamp ? clamped.z : c.z);
-        c = make3(object ? c.x : c0.x, object ? c.y : c0.y, object ? c.z : c0.z);
+        c = select3(clamp, clamped, c);
+        c = select3(object, c, c0);
         h = object ? maxf(h, 1.0f) : h0;
         slow.store(i, c);
         length[i] = h;
@@ -338,7 +336,7 @@ struct DetailSplitKernel {
         noisy.store(i, make3(maxf(n.x - s.x / a.x, 0.0f), maxf(n.y - s.y / a.y, 0.0f),
                              maxf(n.z - s.z / a.z, 0.0f)));
         specularOut.store(i, s);
-        lobe.at(0, i) = r >= 0.0f ? minf(r, 1.0f) : (r < 0.0f ? 0.0f : 1.0f);
+        lobe.at(0, i) = unitNanAsOne(r);
         lobe.at(1, i) = hitDistance.data ? finiteNonNegative(hitDistance.load(x, y, 0)) : 0.0f;
     }
 };
@@ -363,8 +361,7 @@ struct DetailSpecularReprojectKernel {
     const float* previousLength;
     PlaneSet history;  // in: DetailReproject's; out: the reflection's where it holds, capped
     std::uint8_t* validity;
-    PlaneSet lobe;  // DetailSplit's: roughness, hit distance
-    int hasHitDistance;
+    PlaneSet lobe;  // DetailSplit's: roughness, hit distance (0: none)
     Float3 cameraPosition;
     float maxHistory;
     // Surface history frames kept per pixel of parallax at roughness 0 (x (1 - r)^2).
@@ -406,7 +403,7 @@ struct DetailSpecularReprojectKernel {
         // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at
         // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
         // a sphere's reflection moves almost with its surface.
-        float distance = hasHitDistance ? lobe.at(1, i) : 0.0f;
+        float distance = lobe.at(1, i);
         const float k = maxf(curvatureAt(i, 1), curvatureAt(i, L.pitch));
         const float focal = 0.5f / maxf(k, 1e-6f);
         distance = distance * focal / (distance + focal);
@@ -447,14 +444,9 @@ struct DetailSpecularReprojectKernel {
         DetailHistorySample surface = DetailReprojectKernel::load(history, i);
         const float cap = maxHistory / (1.0f + kParallaxFrames * parallax * square(1.0f - r));
         surface.length = live ? minf(surface.length, maxf(cap - 1.0f, 0.0f)) : surface.length;
-        // Per component (a selected structure would stop the CPU vectorising the kernel).
         DetailHistorySample out;
-        out.slow = make3(followed ? reflected.slow.x : surface.slow.x,
-                         followed ? reflected.slow.y : surface.slow.y,
-                         followed ? reflected.slow.z : surface.slow.z);
-        out.fast = make3(followed ? reflected.fast.x : surface.fast.x,
-                         followed ? reflected.fast.y : surface.fast.y,
-                         followed ? reflected.fast.z : surface.fast.z);
+        out.slow = select3(followed, reflected.slow, surface.slow);
+        out.fast = select3(followed, reflected.fast, surface.fast);
         out.mean = followed ? reflected.mean : surface.mean;
         out.variance = followed ? reflected.variance : surface.variance;
         out.length = followed ? reflected.length : surface.length;

@@ -107,7 +107,6 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                                        {},
                                        c.bytes(validity),
                                        c.planeSet(shared.lobe),
-                                       frame.hitDistance.data ? 1 : 0,
                                        frame.cameraPosition,
                                        float(d.maxHistory)};
                   }
