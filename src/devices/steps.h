@@ -111,6 +111,7 @@ struct SvgfVarianceStep {
 struct SvgfAtrousIterationStep {
     SvgfAtrousModulatedKernel iteration;
     bool modulated = false;
+    const std::int32_t* onlyKeyed = nullptr;  // as in DetailTemporalStageStep
 };
 
 // The detail method's reprojection (with the 3x3 search) and accumulation of both histories.
@@ -122,6 +123,9 @@ struct DetailTemporalStageStep {
     DetailAccumulateKernel accumulate;
     DetailSpecularReprojectKernel specular = {};
     int hasSpecular = 0;
+    // Set (the split signal's specular passes): the pixels whose key here is < 0 may be skipped,
+    // their outputs left unspecified (the CPU skips runs of them: WhereKeyed).
+    const std::int32_t* onlyKeyed = nullptr;
 };
 
 // The ingest's image into the diffuse and specular signals (frames with a specular input).
@@ -141,6 +145,7 @@ struct DetailClampStep {
     LuminanceRowSumsKernel currentRows;
     DetailClampKernel clamp;
     DetailScaleKernel scale;
+    const std::int32_t* onlyKeyed = nullptr;  // as in DetailTemporalStageStep (not the row sums)
 };
 
 struct ModulateStep {

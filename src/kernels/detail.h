@@ -306,16 +306,22 @@ RTD_HOST_DEVICE RTD_INLINE float finiteNonNegative(float v) {
 // demodulated: its colour is the lobe's, not the texture's).
 // Also the lobe's roughness and hit distance, read once here into planes (lobe) for
 // DetailSpecularReproject (a caller's buffer's per-pixel type switch would keep that kernel's
-// CPU loop scalar).
+// CPU loop scalar), and the specular passes' object IDs and filter keys: the frame's where the
+// lobe is kept apart, -1 elsewhere. Those pixels' specular signal is 0: its passes skip them
+// (WhereKeyed on the CPU), and neither the reprojection nor the filters take them in.
 struct DetailSplitKernel {
     Layout layout;
     Planes3 noisy;   // in: beauty / albedo; out: the diffuse signal
     Planes3 albedo;  // the ingest's factor (floored at its epsilon, 1 on background)
     InputSpan specular;
-    InputSpan roughness;
+    InputSpan roughness;    // NaN: rough (the lobe goes to the diffuse signal)
     InputSpan hitDistance;  // data null: none
+    const std::int32_t* objectId;
+    const std::int32_t* filterKey;
     Planes3 specularOut;
     PlaneSet lobe;  // out: roughness in [0, 1] (NaN: 1), hit distance (0: none or not finite)
+    std::int32_t* lobeId;   // out: objectId where the lobe is kept apart, else -1
+    std::int32_t* lobeKey;  // out: filterKey likewise
     // A rough lobe's reflection is as blurred as the diffuse light: between these roughnesses it
     // goes over into the diffuse signal, whose history and filter it then shares (filtered
     // apart, a rough lobe's 1-spp samples add noise: docs/quality.md).
@@ -323,8 +329,8 @@ struct DetailSplitKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = layout.index(x, y);
-        float r = roughness.load(x, y, 0);  // NaN: specular kept
-        float keep =
+        const float r = unitNanAsOne(roughness.load(x, y, 0));
+        const float keep =
             r > kSpecularUpTo
                 ? maxf(0.0f, minf(1.0f, (kDiffuseFrom - r) / (kDiffuseFrom - kSpecularUpTo)))
                 : 1.0f;
@@ -336,8 +342,11 @@ struct DetailSplitKernel {
         noisy.store(i, make3(maxf(n.x - s.x / a.x, 0.0f), maxf(n.y - s.y / a.y, 0.0f),
                              maxf(n.z - s.z / a.z, 0.0f)));
         specularOut.store(i, s);
-        lobe.at(0, i) = unitNanAsOne(r);
+        lobe.at(0, i) = r;
         lobe.at(1, i) = hitDistance.data ? finiteNonNegative(hitDistance.load(x, y, 0)) : 0.0f;
+        const bool kept = keep > 0.0f;
+        lobeId[i] = kept ? objectId[i] : -1;
+        lobeKey[i] = kept ? filterKey[i] : -1;
     }
 };
 
@@ -455,14 +464,17 @@ struct DetailSpecularReprojectKernel {
     }
 };
 
-// The filtered specular signal added to the output (where the diffuse one was written).
+// The filtered specular signal added to the output (where the diffuse one was written), where
+// key >= 0 (DetailSplitKernel::lobeKey: elsewhere the specular passes left `add` unspecified).
 struct AddToOutputKernel {
     Layout layout;
     Planes3 add;
+    const std::int32_t* key;
     float* rgbOut;  // interleaved, 3 floats per pixel
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex s = PixelIndex(y) * layout.width + x;
-        Float3 a = add.load(layout.index(x, y));
+        const PixelIndex i = layout.index(x, y);
+        const Float3 a = select3(key[i] >= 0, add.load(i), Float3{});
         rgbOut[3 * s] += a.x;
         rgbOut[3 * s + 1] += a.y;
         rgbOut[3 * s + 2] += a.z;

@@ -95,6 +95,7 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                                                     d.momentsAlpha};
                   DetailTemporalStageStep step{reproject, accumulate};
                   if (specular) {
+                      step.onlyKeyed = g.filterKey;
                       step.hasSpecular = 1;
                       step.specular = {g,
                                        before,
@@ -125,13 +126,15 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
         [=](const PassContext& c) {
             const GBufferView g = gbuffer(c, f);
             const bool antiLag = d.antiLag;
-            c.device().run(DetailClampStep{
+            DetailClampStep step{
                 {g, c.planes(fast), c.planeSet(f.windowSums), kWindow},
                 {g, c.planes(in), c.planeSet(currentSums), kWindow},
                 {g, c.planes(in), c.planeSet(f.windowSums), c.planeSet(currentSums), c.planes(slow),
                  c.planeSet(moments), c.floats(length), c.planeSet(variance), c.floats(lagScale),
                  d.clampSigma, float(d.fastHistory), d.momentsAlpha, antiLag ? 1 : 0},
-                {c.layout(), c.planes(fast), c.floats(lagScale)}});
+                {c.layout(), c.planes(fast), c.floats(lagScale)}};
+            if (specular) step.onlyKeyed = g.filterKey;
+            c.device().run(step);
         });
 
     // Short histories only (block-sparse): SVGF's 7x7 estimate of the variance and colour, with
@@ -154,7 +157,7 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
 
     return declareGuidedIterations(
         p, f, passPrefix + "atrous", derivatives, variance, shared.filterA, shared.filterB,
-        specular ? d.specularIterations : d.iterations, terms, -1, {}, toOutput);
+        specular ? d.specularIterations : d.iterations, terms, -1, {}, toOutput, specular);
 }
 
 }  // namespace
@@ -163,16 +166,30 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
                           const MethodInputs& inputs) {
     FrameImages f = declareIngest(p, settings);
     ResourceId specularNoisy, lobe;
+    // The specular passes' G-buffer: the frame's, with their own object IDs and filter keys, -1
+    // where the lobe is not kept apart (DetailSplitKernel): they skip those pixels and never
+    // take them in.
+    FrameImages specularFrame = f;
     if (inputs.specular) {
         specularNoisy = p.declare(floatImage("specularNoisy", 3));
         lobe = p.declare(floatImage("specularLobe", 2));
-        p.addPass("detail-split", StepKind::DetailSplit, {p.frame(), f.noisy, f.albedo},
-                  {f.noisy, specularNoisy, lobe}, 0,
-                  [f, specularNoisy, lobe](const PassContext& c) {
+        specularFrame.objectId = p.declare({.name = "specularObjectId",
+                                            .element = Element::Int32,
+                                            .lifetime = Lifetime::History,
+                                            .fillByte = 0xff});
+        specularFrame.filterKeys =
+            p.declare({.name = "specularFilterKeys", .element = Element::Int32, .fillByte = 0xff});
+        const FrameImages s = specularFrame;
+        p.addPass("detail-split", StepKind::DetailSplit,
+                  {p.frame(), f.noisy, f.albedo, f.objectId, f.filterKeys},
+                  {f.noisy, specularNoisy, lobe, s.objectId, s.filterKeys}, 0,
+                  [f, s, specularNoisy, lobe](const PassContext& c) {
                       const FrameBinding& frame = c.frame();
                       DetailSplitStep step{{c.layout(), c.planes(f.noisy), c.planes(f.albedo),
                                             frame.specular, frame.roughness, frame.hitDistance,
-                                            c.planes(specularNoisy), c.planeSet(lobe)}};
+                                            c.ints(f.objectId), c.ints(f.filterKeys),
+                                            c.planes(specularNoisy), c.planeSet(lobe),
+                                            c.ints(s.objectId), c.ints(s.filterKeys)}};
                       c.device().run(step);
                   });
     }
@@ -202,13 +219,15 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
     declareSignal(p, settings, f, shared, in, false, true);
     if (!inputs.specular) return f;
 
-    FrameImages specularImages = f;
-    specularImages.noisy = specularNoisy;
-    ResourceId specularIn = declareDespeckle(p, settings, specularImages, false, "specular");
-    ResourceId filtered = declareSignal(p, settings, f, shared, specularIn, true, false);
-    p.addPass("add-specular", StepKind::AddToOutput, {filtered, p.output()}, {p.output()}, 0,
-              [filtered](const PassContext& c) {
-                  c.device().run(AddToOutputStep{{c.layout(), c.planes(filtered), c.output()}});
+    specularFrame.noisy = specularNoisy;
+    ResourceId specularIn = declareDespeckle(p, settings, specularFrame, false, "specular");
+    ResourceId filtered =
+        declareSignal(p, settings, specularFrame, shared, specularIn, true, false);
+    const ResourceId keys = specularFrame.filterKeys;
+    p.addPass("add-specular", StepKind::AddToOutput, {filtered, keys, p.output()}, {p.output()}, 0,
+              [filtered, keys](const PassContext& c) {
+                  c.device().run(
+                      AddToOutputStep{{c.layout(), c.planes(filtered), c.ints(keys), c.output()}});
               });
     return f;
 }

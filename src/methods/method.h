@@ -71,12 +71,14 @@ void declareSpatialFilter(Pipeline& pipeline, const DenoiserSettings& settings,
 // `feedbackIteration` (-1: none) writing `feedback` instead (and the next one reading it from
 // there); the last one writes the output times the albedo, unless it is the feedback one: then
 // a modulate pass follows. toOutput false: the last one writes filterA or filterB like the
-// others. Returns what the last one wrote.
+// others. onlyKeyed: pixels whose filter key is < 0 may be skipped, their outputs left
+// unspecified (the split signal's specular passes). Returns what the last one wrote.
 ResourceId declareGuidedIterations(Pipeline& pipeline, const FrameImages& images,
                                    const std::string& prefix, ResourceId derivatives, ResourceId in,
                                    ResourceId filterA, ResourceId filterB, int iterations,
                                    SvgfTerms terms, int feedbackIteration = -1,
-                                   ResourceId feedback = {}, bool toOutput = true);
+                                   ResourceId feedback = {}, bool toOutput = true,
+                                   bool onlyKeyed = false);
 // "modulate": the albedo multiplied back into `source` (its first three planes), written into
 // the output.
 void declareModulate(Pipeline& pipeline, const FrameImages& images, ResourceId source);

@@ -216,7 +216,8 @@ void declareSpatialFilter(Pipeline& p, const DenoiserSettings& settings, const F
 ResourceId declareGuidedIterations(Pipeline& p, const FrameImages& f, const std::string& prefix,
                                    ResourceId derivatives, ResourceId in, ResourceId filterA,
                                    ResourceId filterB, int iterations, SvgfTerms terms,
-                                   int feedbackIteration, ResourceId feedback, bool toOutput) {
+                                   int feedbackIteration, ResourceId feedback, bool toOutput,
+                                   bool onlyKeyed) {
     ResourceId src = in;
     for (int it = 0; it < iterations; ++it) {
         const bool isFeedback = it == feedbackIteration;
@@ -238,7 +239,8 @@ ResourceId declareGuidedIterations(Pipeline& p, const FrameImages& f, const std:
                       } else {
                           iteration.out = c.planeSet(dst);
                       }
-                      c.device().run(SvgfAtrousIterationStep{iteration, modulated});
+                      c.device().run(SvgfAtrousIterationStep{
+                          iteration, modulated, onlyKeyed ? iteration.g.filterKey : nullptr});
                   });
         if (last && !modulated && toOutput) declareModulate(p, f, dst);
         src = dst;

@@ -127,21 +127,22 @@ class CpuDevice final : public Device {
         if (s.modulated)
             sigma128 ? launch(svgfAtrousForm<kPaperSigmaNormal, true, false>(k)) : launch(k);
         else
-            sigma128 ? launch(svgfAtrousForm<kPaperSigmaNormal, false, false>(k))
-                     : launch(svgfAtrousForm<-1, false, false>(k));
+            sigma128
+                ? launchWhereKeyed(svgfAtrousForm<kPaperSigmaNormal, false, false>(k), s.onlyKeyed)
+                : launchWhereKeyed(svgfAtrousForm<-1, false, false>(k), s.onlyKeyed);
     }
     // Split as SVGF's: the vectorised bilinear reprojection, the sparse 3x3 search, the
     // vectorised accumulation.
     void run(const DetailTemporalStageStep& s) override {
         runDetailTemporalStep(s, {detailHistory_.data(), layout_.planeSize},
-                              [this](const auto& k) { launch(k); });
+                              [&](const auto& k) { launchWhereKeyed(k, s.onlyKeyed); });
     }
 
     void run(const DetailClampStep& s) override {
-        runDetailClampStep(s, [this](const auto& k) { launch(k); });
+        runDetailClampStep(s, [&](const auto& k) { launchWhereKeyed(k, s.onlyKeyed); });
     }
     void run(const DetailSplitStep& s) override { launch(s.split); }
-    void run(const AddToOutputStep& s) override { launch(s.add); }
+    void run(const AddToOutputStep& s) override { launchWhereKeyed(s.add, s.add.key); }
     void run(const ModulateStep& s) override { launch(s.modulate); }
 
     void* allocate(std::size_t bytes) override {
@@ -186,6 +187,16 @@ class CpuDevice final : public Device {
     }
     RTD_FOR_EACH_CPU_KERNEL(RTD_DEFINE_LAUNCH)
 #undef RTD_DEFINE_LAUNCH
+
+    // The kernel, or where `keys` is set and the kernel has a WhereKeyed form, that form: the
+    // runs of pixels whose key is < 0 are skipped.
+    template <class Kernel>
+    void launchWhereKeyed(const Kernel& kernel, const std::int32_t* keys) {
+        if constexpr (requires { launch(WhereKeyed<Kernel>{kernel, layout_, keys}); }) {
+            if (keys) return launch(WhereKeyed<Kernel>{kernel, layout_, keys});
+        }
+        launch(kernel);
+    }
 
     const CpuKernelTable& kernels_;
     bool tiles_;  // the firefly removal as one tile pass (a tuning for comparisons)

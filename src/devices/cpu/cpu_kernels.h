@@ -6,6 +6,7 @@
 #pragma once
 
 #include "devices/cpu/cpu_scratch.h"
+#include "devices/cpu/where_keyed.h"
 #include "devices/steps.h"
 #include "rtdenoise/settings.h"
 
@@ -14,49 +15,58 @@ namespace rtd {
 // The kernel forms the CPU device runs (cpu_device.cpp maps the logical steps onto them): planar,
 // split into passes that each vectorise. The GPU's forms (interleaved guide, fused passes) are
 // run on the CPU by the tests only, through parallelFor2D itself.
-#define RTD_FOR_EACH_CPU_KERNEL(X)        \
-    X(IngestKernel)                       \
-    X(MotionIngestKernel)                 \
-    X(ConvertInputKernel)                 \
-    X(ViewDepthFromPositionKernel)        \
-    X(WriteOutputKernel)                  \
-    X(LuminanceRowSumsKernel)             \
-    X(LuminanceRowSumsWideKernel)         \
-    X(ColorRowSumsKernel)                 \
-    X(ColorRowSumsWideKernel)             \
-    X(OutlierKernel)                      \
-    X(OutlierWideKernel)                  \
-    X(OutlierTileKernel)                  \
-    X(OutlierClampTileKernel)             \
-    X(JbfKernel)                          \
-    X(JbfNarrowNormalKernel)              \
-    X(AtrousKernel)                       \
-    X(AtrousNarrowNormalKernel)           \
-    X(AtrousModulatedKernel)              \
-    X(AtrousNarrowNormalModulatedKernel)  \
-    X(GeometryDerivativesKernel)          \
-    X(ReprojectKernel)                    \
-    X(AccumulateModulatedKernel)          \
-    X(AccumulateModulatedWideKernel)      \
-    X(SvgfReprojectKernel)                \
-    X(SvgfReprojectSearchKernel)          \
-    X(SvgfAccumulateKernel)               \
-    X(SvgfVarianceKernel)                 \
-    X(SvgfVarianceNormal128Kernel)        \
-    X(SvgfAtrousKernel)                   \
-    X(SvgfAtrousNormal128Kernel)          \
-    X(SvgfAtrousModulatedKernel)          \
-    X(SvgfAtrousNormal128ModulatedKernel) \
-    X(DetailReprojectKernel)              \
-    X(DetailReprojectSearchKernel)        \
-    X(DetailAccumulateKernel)             \
-    X(DetailAccumulateConfidenceKernel)   \
-    X(DetailClampKernel)                  \
-    X(DetailScaleKernel)                  \
-    X(DetailHistoryFixKernel)             \
-    X(DetailSpecularReprojectKernel)      \
-    X(DetailSplitKernel)                  \
-    X(AddToOutputKernel)                  \
+#define RTD_FOR_EACH_CPU_KERNEL(X)                \
+    X(IngestKernel)                               \
+    X(MotionIngestKernel)                         \
+    X(ConvertInputKernel)                         \
+    X(ViewDepthFromPositionKernel)                \
+    X(WriteOutputKernel)                          \
+    X(LuminanceRowSumsKernel)                     \
+    X(LuminanceRowSumsWideKernel)                 \
+    X(ColorRowSumsKernel)                         \
+    X(ColorRowSumsWideKernel)                     \
+    X(OutlierKernel)                              \
+    X(OutlierWideKernel)                          \
+    X(OutlierTileKernel)                          \
+    X(OutlierClampTileKernel)                     \
+    X(JbfKernel)                                  \
+    X(JbfNarrowNormalKernel)                      \
+    X(AtrousKernel)                               \
+    X(AtrousNarrowNormalKernel)                   \
+    X(AtrousModulatedKernel)                      \
+    X(AtrousNarrowNormalModulatedKernel)          \
+    X(GeometryDerivativesKernel)                  \
+    X(ReprojectKernel)                            \
+    X(AccumulateModulatedKernel)                  \
+    X(AccumulateModulatedWideKernel)              \
+    X(SvgfReprojectKernel)                        \
+    X(SvgfReprojectSearchKernel)                  \
+    X(SvgfAccumulateKernel)                       \
+    X(SvgfVarianceKernel)                         \
+    X(SvgfVarianceNormal128Kernel)                \
+    X(SvgfAtrousKernel)                           \
+    X(SvgfAtrousNormal128Kernel)                  \
+    X(SvgfAtrousModulatedKernel)                  \
+    X(SvgfAtrousNormal128ModulatedKernel)         \
+    X(DetailReprojectKernel)                      \
+    X(DetailReprojectSearchKernel)                \
+    X(DetailAccumulateKernel)                     \
+    X(DetailAccumulateConfidenceKernel)           \
+    X(DetailClampKernel)                          \
+    X(DetailScaleKernel)                          \
+    X(DetailHistoryFixKernel)                     \
+    X(DetailSpecularReprojectKernel)              \
+    X(DetailSplitKernel)                          \
+    X(AddToOutputKernel)                          \
+    X(DetailReprojectWhereKeyedKernel)            \
+    X(DetailSpecularReprojectWhereKeyedKernel)    \
+    X(DetailAccumulateWhereKeyedKernel)           \
+    X(DetailAccumulateConfidenceWhereKeyedKernel) \
+    X(DetailClampWhereKeyedKernel)                \
+    X(DetailScaleWhereKeyedKernel)                \
+    X(SvgfAtrousWhereKeyedKernel)                 \
+    X(SvgfAtrousNormal128WhereKeyedKernel)        \
+    X(AddToOutputWhereKeyedKernel)                \
     X(ModulateKernel)
 
 // One entry per kernel: runs it over a width x height grid of pixels on all cores, with the

@@ -42,7 +42,7 @@ constexpr bool isSparse() {
 // A kernel with `bool active(int x, int y) const` (whose body does nothing where it is false)
 // is block-sparse: its work concerns few pixels but those lie together, so each run of
 // kSparseBlock pixels is tested first (vectorised) and the vectorised body runs only on runs
-// with an active pixel.
+// with an active pixel (a KeyedRuns kernel too: its runs without one are skipped first).
 template <class Kernel>
 concept BlockSparse = requires(const Kernel& k) {
     { k.active(0, 0) } -> std::same_as<bool>;
@@ -100,6 +100,9 @@ RTD_INLINE void runRow(const Kernel& kernel, int x0, int x1, int y) {
     } else if constexpr (KeyedRuns<Kernel> || BlockSparse<Kernel>) {
         for (int b0 = x0; b0 < x1; b0 += kSparseBlock) {
             int b1 = b0 + kSparseBlock < x1 ? b0 + kSparseBlock : x1;
+            if constexpr (BlockSparse<Kernel>) {
+                if (!anyInRun(b0, b1, [&](int x) { return kernel.active(x, y); })) continue;
+            }
             if constexpr (KeyedRuns<Kernel>) {
                 const std::int32_t key = kernel.runKey(b0, y);
                 if (anyInRun(b0, b1, [&](int x) { return kernel.runKey(x, y) != key; })) {
@@ -110,7 +113,6 @@ RTD_INLINE void runRow(const Kernel& kernel, int x0, int x1, int y) {
                     for (int x = b0; x < b1; ++x) kernel.template pixel<true>(x, y, key);
                 }
             } else {
-                if (!anyInRun(b0, b1, [&](int x) { return kernel.active(x, y); })) continue;
                 RTD_CPU_SIMD
                 for (int x = b0; x < b1; ++x) kernel(x, y);
             }
@@ -161,8 +163,9 @@ void parallelRows(int width, int height, const Kernel& kernel, RowOf rowOf) {
         const Kernel local = kernel;
         // A-Trous levels: each core takes one contiguous block of the visited rows, whose tap
         // rows it then reuses from its own L2. The other kernels keep the dynamic chunks, which
-        // suit a streaming pass such as the ingest (both timed: docs/performance-cpu.md).
-        if constexpr (kHasTapRowStride<Kernel>) {
+        // suit a streaming pass such as the ingest (both timed: docs/performance-cpu.md), as do
+        // block-sparse levels: their work may lie in one core's block.
+        if constexpr (kHasTapRowStride<Kernel> && !BlockSparse<Kernel>) {
 #pragma omp for schedule(static)
             for (int k = 0; k < height; ++k) runRow(local, 0, width, rowOf(k));
         } else {

@@ -1,0 +1,45 @@
+// A kernel run by the CPU launcher only on runs of pixels with a key >= 0: the split signal's
+// specular passes, whose images hold nothing where the lobe is not kept apart (their object IDs
+// and filter keys are -1 there, DetailSplitKernel). Those pixels' outputs are left as they were:
+// every reader of them masks them out by those IDs and keys. The CUDA device runs the kernels
+// themselves (every pixel; the same results where a key is >= 0).
+#pragma once
+
+#include <cstdint>
+
+#include "kernels/detail.h"
+#include "kernels/launch_traits.h"
+#include "kernels/svgf.h"
+
+namespace rtd {
+
+template <class Kernel>
+struct WhereKeyed {
+    Kernel kernel;
+    Layout layout;
+    const std::int32_t* key;
+
+    bool active(int x, int y) const { return key[layout.index(x, y)] >= 0; }
+    RTD_INLINE void operator()(int x, int y) const { kernel(x, y); }
+    int tapRowStride() const requires kHasTapRowStride<Kernel> { return kernel.tapRowStride(); }
+    std::int32_t runKey(int x, int y) const requires requires(const Kernel& k) { k.runKey(0, 0); }
+    { return kernel.runKey(x, y); }
+    template <bool KnownKey>
+    RTD_INLINE void pixel(int x, int y, std::int32_t runKey) const requires
+        requires(const Kernel& k) {
+        k.runKey(0, 0);
+    }
+    { kernel.template pixel<KnownKey>(x, y, runKey); }
+};
+
+using DetailReprojectWhereKeyedKernel = WhereKeyed<DetailReprojectKernel>;
+using DetailSpecularReprojectWhereKeyedKernel = WhereKeyed<DetailSpecularReprojectKernel>;
+using DetailAccumulateWhereKeyedKernel = WhereKeyed<DetailAccumulateKernel>;
+using DetailAccumulateConfidenceWhereKeyedKernel = WhereKeyed<DetailAccumulateConfidenceKernel>;
+using DetailClampWhereKeyedKernel = WhereKeyed<DetailClampKernel>;
+using DetailScaleWhereKeyedKernel = WhereKeyed<DetailScaleKernel>;
+using SvgfAtrousWhereKeyedKernel = WhereKeyed<SvgfAtrousKernel>;
+using SvgfAtrousNormal128WhereKeyedKernel = WhereKeyed<SvgfAtrousNormal128Kernel>;
+using AddToOutputWhereKeyedKernel = WhereKeyed<AddToOutputKernel>;
+
+}  // namespace rtd
