@@ -123,6 +123,9 @@ struct DetailTemporalStageStep {
     DetailAccumulateKernel accumulate;
     DetailSpecularReprojectKernel specular = {};
     int hasSpecular = 0;
+    // The frame gives the specular hit distance: the reflection is followed first, and the
+    // surface's history found only where that fails (DetailSpecularFollow, DetailSpecularSurface).
+    int specularFollowsFirst = 0;
     // Set (the split signal's specular passes): the pixels whose key here is < 0 may be skipped,
     // their outputs left unspecified (the CPU skips runs of them: WhereKeyed).
     const std::int32_t* onlyKeyed = nullptr;
@@ -177,16 +180,37 @@ template <class Launch>
 void runDetailTemporalStep(const DetailTemporalStageStep& s, PlaneSet history, Launch&& launch) {
     DetailReprojectKernel reproject = s.reproject;
     reproject.history = history;
-    launch(reproject);
     const DetailReprojectKernel& r = reproject;
-    launch(DetailReprojectSearchKernel{r.g, r.previous, r.objects, r.objectCount, r.derivatives,
-                                       r.test, r.previousSlow, r.previousFast, r.previousMoments,
-                                       r.previousLength, r.history, r.validity, r.hasHistory});
     // Without a history or objects, nothing to follow (and no object to read).
-    if (s.hasSpecular && r.hasHistory && s.specular.objectCount > 0) {
-        DetailSpecularReprojectKernel specular = s.specular;
-        specular.history = history;
+    const bool follow = s.hasSpecular && r.hasHistory && s.specular.objectCount > 0;
+    if (follow && s.specularFollowsFirst) {
+        const DetailSpecularReprojectKernel& k = s.specular;
+        const DetailSpecularFollowKernel specular{k.g,
+                                                  k.previous,
+                                                  k.objects,
+                                                  k.objectCount,
+                                                  k.previousSlow,
+                                                  k.previousFast,
+                                                  k.previousMoments,
+                                                  k.previousLength,
+                                                  history,
+                                                  k.validity,
+                                                  k.lobe,
+                                                  k.cameraPosition,
+                                                  k.maxHistory};
         launch(specular);
+        launch(DetailSpecularSurfaceKernel{reproject, specular});
+    } else {
+        launch(reproject);
+        launch(DetailReprojectSearchKernel{r.g, r.previous, r.objects, r.objectCount, r.derivatives,
+                                           r.test, r.previousSlow, r.previousFast,
+                                           r.previousMoments, r.previousLength, r.history,
+                                           r.validity, r.hasHistory});
+        if (follow) {
+            DetailSpecularReprojectKernel specular = s.specular;
+            specular.history = history;
+            launch(specular);
+        }
     }
     const DetailAccumulateKernel& a = s.accumulate;
     if (a.confidence.data)

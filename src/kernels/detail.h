@@ -100,11 +100,12 @@ struct DetailReproject {
     RTD_HOST_DEVICE RTD_INLINE static DetailHistorySample load(const PlaneSet& h, PixelIndex i) {
         return {h.rgb().load(i), h.rgb(3).load(i), h.at(6, i), h.at(7, i), h.at(8, i)};
     }
-    template <bool KnownId>
+    // Search: the 3x3 search's taps rather than the bilinear ones.
+    template <bool KnownId, bool Search = Search3x3>
     RTD_HOST_DEVICE RTD_INLINE DetailHistorySample sample(PixelIndex i, std::int32_t id,
                                                           std::uint8_t& code) const {
-        auto taps = findHistory<Search3x3, KnownId>(g, i, previous, objects, objectCount,
-                                                    slopesAt(derivatives, i), test, hasHistory, id);
+        auto taps = findHistory<Search, KnownId>(g, i, previous, objects, objectCount,
+                                                 slopesAt(derivatives, i), test, hasHistory, id);
         code = taps.code;
         return gatherDetailHistory(taps, previousSlow, previousFast, previousMoments,
                                    previousLength);
@@ -360,7 +361,11 @@ struct DetailSplitKernel {
 // view moves, the less so the rougher the lobe. Run where the frame has a history and objects.
 // Branch-free (every pixel computes both ways; selects pick what is stored) over runs of one
 // object (KeyedRuns, as DetailReproject), so the CPU vectorises it.
-struct DetailSpecularReprojectKernel {
+// SurfaceAfter (frames with a hit distance, where the reflection is followed almost everywhere):
+// the surface's history is not read; where the reflection is not followed the pixel is marked
+// kReprojectionPending, and DetailSpecularSurface finds the surface's history there alone.
+template <bool SurfaceAfter>
+struct DetailSpecularReproject {
     GBufferView g;
     PreviousGeometry previous;
     const ObjectReprojection* objects;
@@ -389,6 +394,27 @@ struct DetailSpecularReprojectKernel {
         return same && dp2 > 0.0f ? std::sqrt(dot(dn, dn) / maxf(dp2, 1e-30f)) : 0.0f;
     }
 
+    // The surface history's length at (x, y), capped by the parallax where the object is live
+    // (an ID the matrices do not cover reads object 0, then keeps its history).
+    RTD_HOST_DEVICE RTD_INLINE float surfaceLength(int x, int y, PixelIndex i,
+                                                   const ObjectReprojection& object, bool live,
+                                                   float length) const {
+        // Where the surface was (the parallax is measured against it).
+        const Float4 s = transformPoint(object.currentWorldToPreviousScreen, g.position.load(i));
+        const float inverseS = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
+        const float surfaceX = s.x * inverseS - 0.5f, surfaceY = s.y * inverseS - 0.5f;
+        const float parallax = std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
+        const float cap =
+            maxHistory / (1.0f + kParallaxFrames * parallax * square(1.0f - lobe.at(0, i)));
+        return live ? minf(length, maxf(cap - 1.0f, 0.0f)) : length;
+    }
+    RTD_HOST_DEVICE RTD_INLINE float surfaceLength(int x, int y, PixelIndex i, float length) const {
+        const std::int32_t id = g.objectId[i];
+        const bool covered = id >= 0 && id < objectCount;
+        const ObjectReprojection& object = objects[covered ? id : 0];
+        return surfaceLength(x, y, i, object, covered && object.valid, length);
+    }
+
     RTD_HOST_DEVICE RTD_INLINE std::int32_t runKey(int x, int y) const {
         return g.objectId[g.layout.index(x, y)];
     }
@@ -402,13 +428,7 @@ struct DetailSpecularReprojectKernel {
         const bool covered = id >= 0 && id < objectCount;
         const ObjectReprojection& object = objects[covered ? id : 0];
         const bool live = covered && object.valid;
-        const float r = lobe.at(0, i);
         const Float3 position = g.position.load(i);
-        // Where the surface was (the parallax is measured against it).
-        const Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
-        const float inverseS = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
-        const float surfaceX = s.x * inverseS - 0.5f, surfaceY = s.y * inverseS - 0.5f;
-        const float parallax = std::sqrt(square(surfaceX - float(x)) + square(surfaceY - float(y)));
         // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at
         // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
         // a sphere's reflection moves almost with its surface.
@@ -450,9 +470,15 @@ struct DetailSpecularReprojectKernel {
         for (int t = 0; t < 4; ++t) taps.weight[t] *= inverseTotal;
         const DetailHistorySample reflected =
             gatherDetailHistory(taps, previousSlow, previousFast, previousMoments, previousLength);
+        if constexpr (SurfaceAfter) {
+            DetailReprojectKernel::store(history, i, reflected);
+            validity[i] = followed  ? std::uint8_t(kReprojectionValid)
+                          : id >= 0 ? std::uint8_t(kReprojectionPending)
+                                    : validity[i];
+            return;
+        }
         DetailHistorySample surface = DetailReprojectKernel::load(history, i);
-        const float cap = maxHistory / (1.0f + kParallaxFrames * parallax * square(1.0f - r));
-        surface.length = live ? minf(surface.length, maxf(cap - 1.0f, 0.0f)) : surface.length;
+        surface.length = surfaceLength(x, y, i, object, live, surface.length);
         DetailHistorySample out;
         out.slow = select3(followed, reflected.slow, surface.slow);
         out.fast = select3(followed, reflected.fast, surface.fast);
@@ -461,6 +487,29 @@ struct DetailSpecularReprojectKernel {
         out.length = followed ? reflected.length : surface.length;
         DetailReprojectKernel::store(history, i, out);
         validity[i] = followed ? std::uint8_t(kReprojectionValid) : validity[i];
+    }
+};
+
+using DetailSpecularReprojectKernel = DetailSpecularReproject<false>;
+using DetailSpecularFollowKernel = DetailSpecularReproject<true>;
+
+// After DetailSpecularFollow: the surface's history (the bilinear taps, else the 3x3 search)
+// capped by the parallax, on the pixels whose reflection could not be followed
+// (kReprojectionPending: disocclusions, the screen's edges; few, so sparse).
+struct DetailSpecularSurfaceKernel {
+    static constexpr bool kSparse = true;  // the CPU launcher keeps it scalar
+    DetailReprojectKernel surface;         // its history and validity: the specular stage's
+    DetailSpecularFollowKernel specular;   // the parallax cap
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const PixelIndex i = surface.g.layout.index(x, y);
+        if (surface.validity[i] != kReprojectionPending) return;
+        std::uint8_t code;
+        DetailHistorySample s = surface.sample<false>(i, 0, code);
+        if (code == kReprojectionOtherObject) s = surface.sample<false, true>(i, 0, code);
+        s.length = specular.surfaceLength(x, y, i, s.length);
+        surface.validity[i] = code;
+        DetailReprojectKernel::store(surface.history, i, s);
     }
 };
 

@@ -17,6 +17,9 @@ enum ReprojectionCode : std::uint8_t {
     kReprojectionOtherObject = 2,  // or, with geometry tests, depth/normal disagree
     kReprojectionBackground = 3,
     kReprojectionNoHistory = 4,
+    // Transient (DetailSpecularFollow to DetailSpecularSurface): the reflection could not be
+    // followed, the surface's history is still to be found.
+    kReprojectionPending = 5,
 };
 
 struct ObjectReprojection {

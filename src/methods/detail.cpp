@@ -97,6 +97,7 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                   if (specular) {
                       step.onlyKeyed = g.filterKey;
                       step.hasSpecular = 1;
+                      step.specularFollowsFirst = frame.hitDistance.data ? 1 : 0;
                       step.specular = {g,
                                        before,
                                        c.objects(),

@@ -56,10 +56,13 @@ namespace rtd {
     X(DetailScaleKernel)                          \
     X(DetailHistoryFixKernel)                     \
     X(DetailSpecularReprojectKernel)              \
+    X(DetailSpecularFollowKernel)                 \
+    X(DetailSpecularSurfaceKernel)                \
     X(DetailSplitKernel)                          \
     X(AddToOutputKernel)                          \
     X(DetailReprojectWhereKeyedKernel)            \
     X(DetailSpecularReprojectWhereKeyedKernel)    \
+    X(DetailSpecularFollowWhereKeyedKernel)       \
     X(DetailAccumulateWhereKeyedKernel)           \
     X(DetailAccumulateConfidenceWhereKeyedKernel) \
     X(DetailClampWhereKeyedKernel)                \

@@ -34,6 +34,7 @@ struct WhereKeyed {
 
 using DetailReprojectWhereKeyedKernel = WhereKeyed<DetailReprojectKernel>;
 using DetailSpecularReprojectWhereKeyedKernel = WhereKeyed<DetailSpecularReprojectKernel>;
+using DetailSpecularFollowWhereKeyedKernel = WhereKeyed<DetailSpecularFollowKernel>;
 using DetailAccumulateWhereKeyedKernel = WhereKeyed<DetailAccumulateKernel>;
 using DetailAccumulateConfidenceWhereKeyedKernel = WhereKeyed<DetailAccumulateConfidenceKernel>;
 using DetailClampWhereKeyedKernel = WhereKeyed<DetailClampKernel>;
