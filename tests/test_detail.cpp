@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "kernel_harness.h"
 #include "test_support.h"
@@ -260,6 +261,35 @@ TEST(DetailSplit, BothSignalsAddUpToAConstantBeauty) {
                     << "pixel " << k / 3 << " roughness " << roughness;
         }
     }
+}
+
+TEST(DetailSplit, ANanRoughnessSendsTheLobeToTheDiffuseSignal) {
+    // Two objects (left, right), noisy; the left's lobe glossy (kept apart). The right's
+    // roughness NaN gives there what a rough one (0.9, merged into the diffuse signal) gives:
+    // its pixels are never the specular passes' (which skip them and filter none of theirs).
+    SceneDescription d;
+    d.width = d.height = 32;
+    d.objectCount = 2;
+    d.id = [](int x, int) { return x < 16 ? 0 : 1; };
+    d.colour = [](int x, int) { return std::array<float, 3>{0.8f, 0.5f + 0.01f * float(x), 0.2f}; };
+    Image out[2];
+    for (int variant = 0; variant < 2; ++variant) {
+        Denoiser denoiser(test::cpuSettings(Method::Detail));
+        for (int i = 0; i < 4; ++i) {
+            Frame frame = makeFrame(d);
+            test::addNoise(frame, 0.3f, 40u + unsigned(i));
+            frame = withSpecular(frame, 0.4f, 0.1f);
+            for (int y = 0; y < 32; ++y)
+                for (int x = 16; x < 32; ++x)
+                    frame.roughness->at(x, y, 0) =
+                        variant == 0 ? std::numeric_limits<float>::quiet_NaN() : 0.9f;
+            out[variant] = denoiser.processFrame(frame);
+        }
+    }
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x)
+            for (int c = 0; c < 3; ++c)
+                ASSERT_EQ(out[0].at(x, y, c), out[1].at(x, y, c)) << x << ", " << y;
 }
 
 // A planar mirror at depth 4 (facing the camera) reflecting stripes 4 further away, seen by a

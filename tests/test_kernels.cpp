@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "devices/cpu/parallel_for.h"
+#include "devices/cpu/where_keyed.h"
 #include "kernel_harness.h"
 
 namespace rtd {
@@ -862,6 +863,29 @@ TEST(CpuLauncher, RunsOfOneKeyGetItKnownOthersRunPerPixel) {
         for (int x = 0; x < w; ++x) {
             bool mixed = (y == 2 && x >= 16 && x < 32) || (y == 4 && x >= 64);
             EXPECT_EQ(how[std::size_t(y * w + x)], mixed ? 2 : 1) << x << ", " << y;
+        }
+}
+
+// WhereKeyed (the split signal's specular passes): a keyed kernel's runs without a key >= 0
+// are skipped; the others run keyed as before, the skipped key's pixels in them included.
+TEST(CpuLauncher, WhereKeyedSkipsRunsWithoutAKeyAndKeepsTheKeyedRuns) {
+    const int w = 70, h = 4;  // 4 runs of 16 and a short one per row
+    std::vector<std::int32_t> keys(w * h, 3), mask(w * h, -1);
+    std::vector<std::uint8_t> how(w * h, 0);
+    for (int x = 16; x < 32; ++x) mask[1 * w + x] = 3;  // row 1, run [16, 32): all keyed
+    mask[2 * w + 40] = 3;                               // row 2, run [32, 48): one pixel keyed
+    keys[3 * w + 66] = 5;                               // row 3, the short run: mixed IDs,
+    mask[3 * w + 65] = 3;                               // one pixel keyed
+    using Masked = WhereKeyed<RecordKeyedRuns>;
+    static_assert(KeyedRuns<Masked> && BlockSparse<Masked>);
+    const Layout unpadded{w, h, w, 0, 0, w * h};
+    parallelFor2D(w, h, Masked{RecordKeyedRuns{w, keys.data(), how.data()}, unpadded, mask.data()});
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            int expected = (y == 1 && x >= 16 && x < 32) || (y == 2 && x >= 32 && x < 48) ? 1
+                           : y == 3 && x >= 64                                            ? 2
+                                                                                          : 0;
+            EXPECT_EQ(how[std::size_t(y * w + x)], expected) << x << ", " << y;
         }
 }
 
