@@ -105,6 +105,7 @@ struct SvgfTemporalStageStep {
 struct SvgfVarianceStep {
     SvgfVarianceKernel variance;
     DetailHistoryFixKernel historyFix = {};
+    const std::int32_t* onlyKeyed = nullptr;  // as in DetailTemporalStageStep
 };
 
 // Modulated: writes the result times the albedo into the output instead of `out`.
@@ -148,7 +149,7 @@ struct DetailClampStep {
     LuminanceRowSumsKernel currentRows;
     DetailClampKernel clamp;
     DetailScaleKernel scale;
-    const std::int32_t* onlyKeyed = nullptr;  // as in DetailTemporalStageStep (not the row sums)
+    const std::int32_t* onlyKeyed = nullptr;  // as in DetailTemporalStageStep
 };
 
 struct ModulateStep {

@@ -146,15 +146,17 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     SvgfTerms wide = terms;
     wide.sigmaLuminance = 10.0f;
     constexpr float kShortHistory = 1.0f, kSpatialUntil = 3.0f;  // frames: share 1 -> 0
-    p.addPass(passPrefix + "variance", StepKind::SvgfVariance,
-              with(gbufferReads(f), {slow, moments, length, derivatives, variance}),
-              {variance, slow}, kSvgfWindowRadius, [=](const PassContext& c) {
-                  c.device().run(SvgfVarianceStep{
-                      {gbuffer(c, f), c.planeSet(derivatives), c.planes(slow), c.planeSet(moments),
-                       c.floats(length), c.planeSet(variance), wide, kShortHistory, kSpatialUntil},
-                      {c.layout(), c.planeSet(variance), c.planes(slow), c.floats(length),
-                       kSpatialUntil}});
-              });
+    p.addPass(
+        passPrefix + "variance", StepKind::SvgfVariance,
+        with(gbufferReads(f), {slow, moments, length, derivatives, variance}), {variance, slow},
+        kSvgfWindowRadius, [=](const PassContext& c) {
+            const GBufferView g = gbuffer(c, f);
+            c.device().run(SvgfVarianceStep{
+                {g, c.planeSet(derivatives), c.planes(slow), c.planeSet(moments), c.floats(length),
+                 c.planeSet(variance), wide, kShortHistory, kSpatialUntil},
+                {c.layout(), c.planeSet(variance), c.planes(slow), c.floats(length), kSpatialUntil},
+                specular ? g.filterKey : nullptr});
+        });
 
     return declareGuidedIterations(
         p, f, passPrefix + "atrous", derivatives, variance, shared.filterA, shared.filterB,

@@ -119,7 +119,7 @@ class CpuDevice final : public Device {
             launch(svgfVarianceForm<kPaperSigmaNormal, false>(s.variance));
         else
             launch(s.variance);
-        if (s.historyFix.slow.data) launch(s.historyFix);
+        if (s.historyFix.slow.data) launchWhereKeyed(s.historyFix, s.onlyKeyed);
     }
     void run(const SvgfAtrousIterationStep& s) override {
         const bool sigma128 = hasPaperSigmaNormal(s.iteration.terms);
@@ -192,8 +192,9 @@ class CpuDevice final : public Device {
     // runs of pixels whose key is < 0 are skipped.
     template <class Kernel>
     void launchWhereKeyed(const Kernel& kernel, const std::int32_t* keys) {
-        if constexpr (requires { launch(WhereKeyed<Kernel>{kernel, layout_, keys}); }) {
-            if (keys) return launch(WhereKeyed<Kernel>{kernel, layout_, keys});
+        using Masked = WhereKeyed<Kernel, kKeyedReach<Kernel>>;
+        if constexpr (requires { launch(Masked{kernel, layout_, keys}); }) {
+            if (keys) return launch(Masked{kernel, layout_, keys});
         }
         launch(kernel);
     }

@@ -70,6 +70,9 @@ namespace rtd {
     X(SvgfAtrousWhereKeyedKernel)                 \
     X(SvgfAtrousNormal128WhereKeyedKernel)        \
     X(AddToOutputWhereKeyedKernel)                \
+    X(DetailHistoryFixWhereKeyedKernel)           \
+    X(ColorRowSumsWhereKeyedKernel)               \
+    X(LuminanceRowSumsWhereKeyedKernel)           \
     X(ModulateKernel)
 
 // One entry per kernel: runs it over a width x height grid of pixels on all cores, with the
