@@ -384,13 +384,16 @@ struct DetailSpecularReproject {
 
     // The surface's curvature at i (1 / radius), from the normal's and the position's change to
     // the neighbours on the same object: a convex mirror's virtual image is nearer than the hit.
-    RTD_HOST_DEVICE RTD_INLINE float curvatureAt(PixelIndex i, PixelIndex step) const {
-        std::int32_t id = g.objectId[i];
-        PixelIndex j = g.objectId[i + step] == id ? i + step : i - step;
-        bool same = g.objectId[j] == id;
-        Float3 dn = g.normal.load(j) - g.normal.load(i);
-        Float3 dp = g.position.load(j) - g.position.load(i);
-        float dp2 = dot(dp, dp);
+    // Both neighbours are loaded and one picked (on the CPU contiguous loads, not gathers).
+    RTD_HOST_DEVICE RTD_INLINE float curvatureAt(PixelIndex i, PixelIndex step, std::int32_t id,
+                                                 Float3 normal, Float3 position) const {
+        const bool forward = g.objectId[i + step] == id;
+        const bool same = forward || g.objectId[i - step] == id;
+        const Float3 dn =
+            select3(forward, g.normal.load(i + step), g.normal.load(i - step)) - normal;
+        const Float3 dp =
+            select3(forward, g.position.load(i + step), g.position.load(i - step)) - position;
+        const float dp2 = dot(dp, dp);
         return same && dp2 > 0.0f ? std::sqrt(dot(dn, dn) / maxf(dp2, 1e-30f)) : 0.0f;
     }
 
@@ -433,7 +436,9 @@ struct DetailSpecularReproject {
         // distance d lies d f / (d + f) behind it (the thin-lens equation, as NRD applies it):
         // a sphere's reflection moves almost with its surface.
         float distance = lobe.at(1, i);
-        const float k = maxf(curvatureAt(i, 1), curvatureAt(i, L.pitch));
+        const Float3 normal = g.normal.load(i);
+        const float k = maxf(curvatureAt(i, 1, id, normal, position),
+                             curvatureAt(i, L.pitch, id, normal, position));
         const float focal = 0.5f / maxf(k, 1e-6f);
         distance = distance * focal / (distance + focal);
         const Float3 view = normalize(position - cameraPosition);
@@ -447,20 +452,23 @@ struct DetailSpecularReproject {
         vx = onScreen ? vx : 0.0f;  // in range (NaN too) before the conversion to int
         vy = onScreen ? vy : 0.0f;
         const Float3 expectedNormal =
-            normalize(transformVector(object.currentWorldToPreviousWorld, g.normal.load(i)));
+            normalize(transformVector(object.currentWorldToPreviousWorld, normal));
         const float fx = std::floor(vx), fy = std::floor(vy);
         const int x0 = int(fx), y0 = int(fy);
         const float ax = vx - fx, ay = vy - fy;
         HistoryTaps<4> taps;
+        RTD_UNROLL
+        for (int t = 0; t < 4; ++t) taps.index[t] = L.index(x0 + (t & 1), y0 + (t >> 1));
+        std::int32_t previousId[4];
+        float nx[4], ny[4], nz[4];
+        loadTaps(previous.objectId, taps, previousId);  // in pairs of neighbours
+        loadTaps(previous.normal, taps, nx, ny, nz);
         float total = 0.0f;
         RTD_UNROLL
         for (int t = 0; t < 4; ++t) {
-            PixelIndex j = L.index(x0 + (t & 1), y0 + (t >> 1));
-            Float3 n = previous.normal.load(j);
-            bool ok =
-                onScreen && previous.objectId[j] == id && dot(n, expectedNormal) > kNormalAgreement;
+            bool ok = onScreen && previousId[t] == id &&
+                      dot(make3(nx[t], ny[t], nz[t]), expectedNormal) > kNormalAgreement;
             float w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
-            taps.index[t] = j;
             taps.weight[t] = ok ? w : 0.0f;
             total += taps.weight[t];
         }
