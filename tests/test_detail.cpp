@@ -349,5 +349,25 @@ TEST(DetailSplit, HitDistanceFollowsAReflectionTheSurfaceWouldSmear) {
     EXPECT_LT(error[0], 0.5 * error[2]) << error[0] << " " << error[2];
 }
 
+TEST(DetailSplit, TheSurfaceFoundAfterTheReflectionGivesWhatItGaveBefore) {
+    // A hit distance of 0 everywhere (unknown) follows no reflection: every pixel's specular
+    // history is then the surface's, found after the attempt (DetailSpecularSurface, sparse)
+    // where without a hit distance it is found first, on every pixel. Both must agree.
+    Image out[2];
+    for (int variant = 0; variant < 2; ++variant) {
+        Denoiser denoiser(test::cpuSettings(Method::Detail));
+        for (int i = 0; i < 8; ++i) {
+            Frame f = mirrorFrame(i, 700u + unsigned(i), nullptr);
+            if (variant == 0)
+                f.hitDistance = Image(f.width(), f.height(), 1, 0.0f);
+            else
+                f.hitDistance.reset();
+            out[variant] = denoiser.processFrame(f);
+        }
+    }
+    for (std::size_t k = 0; k < out[0].pixels.size(); ++k)
+        ASSERT_NEAR(out[0].pixels[k], out[1].pixels[k], 1e-5f) << "value " << k;
+}
+
 }  // namespace
 }  // namespace rtd
