@@ -93,6 +93,35 @@ TEST(BadValues, HugeFiniteRadianceGivesAFiniteResult) {
     }
 }
 
+// The split signal: lobes kept apart and merged pixel by pixel (every run of the specular passes
+// mixed, so their skipped pixels lie beside the filtered ones), with NaN, Inf, negative and huge
+// values in the specular colour, roughness and hit distance. The result must stay finite.
+TEST(BadValues, SplitSignalWithMixedLobesAndBadValuesGivesAFiniteResult) {
+    const float bad[] = {std::nanf(""), INFINITY, -INFINITY, -1.0f, FLT_MAX, 0.0f};
+    for (CpuIsa isa : {CpuIsa::Scalar, CpuIsa::Auto}) {
+        Denoiser denoiser = makeTunedDenoiser(settingsFor(Method::Detail), {isa});
+        for (int frame = 0; frame < 5; ++frame) {
+            Frame f = makeFrame(texturedScene());
+            test::addNoise(f, 0.1f, unsigned(frame));
+            const int w = f.width(), h = f.height();
+            f.specular = Image(w, h, 3);
+            f.roughness = Image(w, h, 1);
+            f.hitDistance = Image(w, h, 1);
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    const int k = x * 5 + y * 3 + frame;
+                    for (int c = 0; c < 3; ++c)
+                        f.specular->at(x, y, c) =
+                            k % 7 == 0 ? bad[(k + c) % 6] : 0.3f * f.beauty.at(x, y, c);
+                    f.roughness->at(x, y, 0) = k % 11 == 0 ? bad[k % 6] : (x + y) % 2 ? 0.1f : 0.9f;
+                    f.hitDistance->at(x, y, 0) = k % 13 == 0 ? bad[k % 6] : 2.0f + 0.1f * float(x);
+                }
+            Image out = denoiser.processFrame(f);
+            ASSERT_EQ(nonFiniteCount(out), 0u) << toString(isa) << ", frame " << frame;
+        }
+    }
+}
+
 // A demodulated colour divides by the albedo: a tiny albedo (or epsilon) must not overflow it,
 // and a huge albedo multiplied back must not either.
 TEST(BadValues, ExtremeAlbedoGivesAFiniteResult) {
