@@ -212,7 +212,7 @@ TEST(Detail, PassesAreDeclaredInOrder) {
     const std::vector<std::string> expected = {
         "ingest",         "outlier",         "geometry",       "detail-temporal",
         "detail-clamp",   "detail-variance", "detail-atrous0", "detail-atrous1",
-        "detail-atrous2", "detail-atrous3",  "detail-atrous4"};
+        "detail-atrous2", "detail-atrous3",  "detail-atrous4", "detail-stabilise"};
     EXPECT_EQ(names, expected);
 }
 

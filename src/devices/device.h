@@ -78,6 +78,7 @@ class Device {
     virtual void run(const DetailTemporalStageStep& step) = 0;
     virtual void run(const DetailClampStep& step) = 0;
     virtual void run(const DetailSplitStep& step) = 0;
+    virtual void run(const DetailStabiliseStep& step) = 0;
     virtual void run(const AddToOutputStep& step) = 0;
     virtual void run(const ModulateStep& step) = 0;
     virtual void run(const ConvertStep& step) = 0;

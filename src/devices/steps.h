@@ -32,6 +32,7 @@ enum class StepKind {
     DetailTemporalStage,
     DetailClamp,
     DetailSplit,
+    DetailStabilise,
     AddToOutput,
     Modulate,
 };
@@ -133,6 +134,10 @@ struct DetailTemporalStageStep {
 };
 
 // The ingest's image into the diffuse and specular signals (frames with a specular input).
+struct DetailStabiliseStep {
+    DetailStabiliseKernel stabilise;
+};
+
 struct DetailSplitStep {
     DetailSplitKernel split;
 };
@@ -206,7 +211,7 @@ void runDetailTemporalStep(const DetailTemporalStageStep& s, PlaneSet history, L
         launch(DetailReprojectSearchKernel{r.g, r.previous, r.objects, r.objectCount, r.derivatives,
                                            r.test, r.previousSlow, r.previousFast,
                                            r.previousMoments, r.previousLength, r.history,
-                                           r.validity, r.hasHistory});
+                                           r.validity, r.hasHistory, r.previousStable});
         if (follow) {
             DetailSpecularReprojectKernel specular = s.specular;
             specular.history = history;
@@ -217,11 +222,11 @@ void runDetailTemporalStep(const DetailTemporalStageStep& s, PlaneSet history, L
     if (a.confidence.data)
         launch(DetailAccumulateConfidenceKernel{a.g, a.radiance, history, a.validity, a.confidence,
                                                 a.slow, a.fast, a.moments, a.length, a.maxHistory,
-                                                a.fastHistory, a.momentsAlpha});
+                                                a.fastHistory, a.momentsAlpha, a.heldStable});
     else
         launch(DetailAccumulateKernel{a.g, a.radiance, history, a.validity, a.confidence, a.slow,
                                       a.fast, a.moments, a.length, a.maxHistory, a.fastHistory,
-                                      a.momentsAlpha});
+                                      a.momentsAlpha, a.heldStable});
 }
 // The detail method's clamp step, alike on both devices: the two window sums, the clamp and
 // anti-lag, then the fast history's scaling (after every neighbour's read of it).

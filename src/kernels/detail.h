@@ -16,12 +16,13 @@
 namespace rtd {
 
 // The reprojected history handed from DetailReproject to DetailAccumulate in planes: slow rgb,
-// fast rgb, luminance mean, luminance variance, length.
-constexpr int kDetailHistoryPlanes = 9;
+// fast rgb, luminance mean, luminance variance, length, stabilised output rgb.
+constexpr int kDetailHistoryPlanes = 12;
 
 struct DetailHistorySample {
     Float3 slow, fast;
     float mean = 0.0f, variance = 0.0f, length = 0.0f;
+    Float3 stable;  // the previous frame's stabilised output (DetailStabilise); 0 without one
 };
 
 // The previous frame's histories, weighted over the taps (the moments' variance includes the
@@ -31,7 +32,8 @@ RTD_HOST_DEVICE RTD_INLINE DetailHistorySample gatherDetailHistory(const History
                                                                    const Planes3& previousSlow,
                                                                    const Planes3& previousFast,
                                                                    const PlaneSet& previousMoments,
-                                                                   const float* previousLength) {
+                                                                   const float* previousLength,
+                                                                   const Planes3& previousStable) {
     float sr[kTaps], sg[kTaps], sb[kTaps], fr[kTaps], fg[kTaps], fb[kTaps];
     float means[kTaps], variances[kTaps], lengths[kTaps];
     loadTaps(previousSlow, taps, sr, sg, sb);
@@ -51,6 +53,12 @@ RTD_HOST_DEVICE RTD_INLINE DetailHistorySample gatherDetailHistory(const History
     RTD_UNROLL
     for (int t = 0; t < kTaps; ++t)
         s.variance += (variances[t] + square(means[t] - s.mean)) * taps.weight[t];
+    if (previousStable.data) {
+        float r[kTaps], g[kTaps], b[kTaps];
+        loadTaps(previousStable, taps, r, g, b);
+        RTD_UNROLL
+        for (int t = 0; t < kTaps; ++t) s.stable += make3(r[t], g[t], b[t]) * taps.weight[t];
+    }
     return s;
 }
 
@@ -73,6 +81,7 @@ struct DetailReproject {
     PlaneSet history;  // out: kDetailHistoryPlanes
     std::uint8_t* validity;
     int hasHistory;
+    Planes3 previousStable = {};  // DetailStabilise's history; data null: none
 
     RTD_HOST_DEVICE RTD_INLINE std::int32_t runKey(int x, int y) const {
         return g.objectId[g.layout.index(x, y)];
@@ -96,9 +105,11 @@ struct DetailReproject {
         h.at(6, i) = s.mean;
         h.at(7, i) = s.variance;
         h.at(8, i) = s.length;
+        h.rgb(9).store(i, s.stable);
     }
     RTD_HOST_DEVICE RTD_INLINE static DetailHistorySample load(const PlaneSet& h, PixelIndex i) {
-        return {h.rgb().load(i), h.rgb(3).load(i), h.at(6, i), h.at(7, i), h.at(8, i)};
+        return {h.rgb().load(i), h.rgb(3).load(i), h.at(6, i), h.at(7, i), h.at(8, i),
+                h.rgb(9).load(i)};
     }
     // Search: the 3x3 search's taps rather than the bilinear ones.
     template <bool KnownId, bool Search = Search3x3>
@@ -108,7 +119,7 @@ struct DetailReproject {
                                                  slopesAt(derivatives, i), test, hasHistory, id);
         code = taps.code;
         return gatherDetailHistory(taps, previousSlow, previousFast, previousMoments,
-                                   previousLength);
+                                   previousLength, previousStable);
     }
 };
 using DetailReprojectKernel = DetailReproject<false>;
@@ -130,6 +141,7 @@ struct DetailAccumulate {
     PlaneSet moments;      // out (history), 2 planes: luminance mean, variance
     float* length;         // out (history): frames in the slow history, 1 after a disocclusion
     float maxHistory, fastHistory, momentsAlpha;
+    Planes3 heldStable = {};  // out: the reprojected stabilised output (DetailStabilise); or null
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
@@ -150,6 +162,7 @@ struct DetailAccumulate {
         moments.at(0, i) = object ? s.mean + am * d : 0.0f;
         moments.at(1, i) = object ? (1.0f - am) * (s.variance + am * d * d) : 0.0f;
         length[i] = object ? hs : 0.0f;
+        if (heldStable.data) heldStable.store(i, s.stable);
     }
 };
 using DetailAccumulateKernel = DetailAccumulate<false>;
@@ -292,6 +305,82 @@ struct DetailHistoryFixKernel {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = layout.index(x, y);
         slow.store(i, estimate.rgb().load(i));
+    }
+};
+
+// The output's stabilisation (NVIDIA NRD ReBLUR's temporal stabilisation, simplified): the
+// filtered illumination blended with the previous frame's stabilised one, clamped first to the
+// current 3x3 neighbourhood's mean +- clampSigma standard deviations (same filter key), so
+// that the residual noise of a narrowed filter does not flicker from frame to frame. Only where
+// a history was found and kept and the anti-lag did not fire (a change passes at once). Writes the
+// stabilised illumination (its history) and the output, times the albedo.
+struct DetailStabiliseKernel {
+    GBufferView g;
+    PlaneSet current;               // the last A-Trous iteration's rgb (+ variance)
+    Planes3 held;                   // DetailAccumulate's heldStable
+    const std::uint8_t* validity;   // DetailReproject's codes
+    const float* lagScale;          // DetailClamp's: 1 where the anti-lag did not fire
+    const float* length;            // the history's length: 1 where none was kept (a caller's
+                                    // confidence of 0 too)
+    Planes3 stable;                 // out (history)
+    Planes3 albedo;
+    float* rgbOut;                  // interleaved, 3 floats per pixel
+    float blend;                    // [0, 1) share of the previous frame's
+    float clampSigma;               // [> 0] the clamp's half width, standard deviations
+    // Where the pixel moved, the share falls: blend / (1 + motionFalloff * pixels moved).
+    PreviousGeometry previous;
+    const ObjectReprojection* objects;
+    int objectCount;
+    float motionFalloff;  // [>= 0] per pixel of motion
+
+    // How far the pixel moved since the previous frame, in pixels (as findHistory finds it).
+    RTD_HOST_DEVICE RTD_INLINE float motionAt(int x, int y, PixelIndex i) const {
+        if (objectCount <= 0) return 0.0f;  // no matrices: no history either (nothing held)
+        const std::int32_t id = g.objectId[i];
+        const bool covered = id >= 0 && id < objectCount;
+        const ObjectReprojection& object = objects[covered ? id : 0];
+        const Float4 s = transformPoint(object.currentWorldToPreviousScreen, g.position.load(i));
+        const bool fromMotion = previous.fromMotion != 0;
+        const Float3 moved = (fromMotion ? previous.motion : g.position).load(i);
+        const float inverseW = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
+        const float sx = fromMotion ? moved.x : s.x * inverseW - 0.5f;
+        const float sy = fromMotion ? moved.y : s.y * inverseW - 0.5f;
+        const float d = std::sqrt(square(sx - float(x)) + square(sy - float(y)));
+        return d < 3.0e38f ? d : 3.0e38f;  // NaN: far
+    }
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const Layout& L = g.layout;
+        const PixelIndex i = L.index(x, y);
+        const std::int32_t key = g.filterKey[i];
+        const Float3 c = current.rgb().load(i);
+        Float3 sum, squares;
+        float n = 0.0f;
+        RTD_UNROLL
+        for (int dy = -1; dy <= 1; ++dy) {
+            RTD_UNROLL
+            for (int dx = -1; dx <= 1; ++dx) {
+                const PixelIndex j = i + L.offset(dx, dy);
+                const float m = g.filterKey[j] == key ? 1.0f : 0.0f;
+                const Float3 v = current.rgb().load(j) * m;
+                sum += v;
+                squares += v * v;
+                n += m;
+            }
+        }
+        const float inverse = 1.0f / maxf(n, 1.0f);
+        const Float3 mean = sum * inverse;
+        const Float3 variance = squares * inverse - mean * mean;
+        const Float3 half = make3(std::sqrt(maxf(variance.x, 0.0f)), std::sqrt(maxf(variance.y, 0.0f)),
+                                  std::sqrt(maxf(variance.z, 0.0f))) *
+                            clampSigma;
+        const Float3 previousValue = clamp3(held.load(i), mean - half, mean + half);
+        const bool holds = key >= 0 && validity[i] == kReprojectionValid && length[i] > 1.0f &&
+                           lagScale[i] == 1.0f;
+        const float share = blend / (1.0f + motionFalloff * motionAt(x, y, i));
+        const Float3 out = select3(holds, c + (previousValue - c) * share, c);
+        stable.store(i, out);
+        storeModulated(L, rgbOut, x, y, out * albedo.load(i));
     }
 };
 
@@ -477,7 +566,7 @@ struct DetailSpecularReproject {
         RTD_UNROLL
         for (int t = 0; t < 4; ++t) taps.weight[t] *= inverseTotal;
         const DetailHistorySample reflected =
-            gatherDetailHistory(taps, previousSlow, previousFast, previousMoments, previousLength);
+            gatherDetailHistory(taps, previousSlow, previousFast, previousMoments, previousLength, {});
         if constexpr (SurfaceAfter) {
             DetailReprojectKernel::store(history, i, reflected);
             validity[i] = followed  ? std::uint8_t(kReprojectionValid)

@@ -8,14 +8,16 @@
 // the first 3 frames and written back into the history (ReLAX's history fix).
 //
 //   ingest -> [outlier] -> geometry -> detail-temporal -> detail-clamp -> detail-variance
-//          -> detail-atrous0 .. detail-atrous{iterations-1} (the last one modulated)
+//          -> detail-atrous0 .. detail-atrous{iterations-1} -> detail-stabilise (modulated)
 //   detail-temporal: reprojection of both histories (3x3 search where the bilinear taps fail),
 //   accumulation (scaled by the caller's confidence where given)
+//   detail-stabilise: the result blended with the previous frame's, clamped to the current
+//   3x3 neighbourhood (NVIDIA NRD ReBLUR's temporal stabilisation), where nothing moved much
 //
 // With the split signal (a specular input, NVIDIA NRD's diffuse/specular), the two are filtered
 // apart, each with its own histories, and added at the end:
 //   ingest -> detail-split -> [outlier, outlier-specular] -> geometry
-//          -> diffuse:  detail-temporal .. detail-atrous{last} (modulated, into the output)
+//          -> diffuse:  detail-temporal .. detail-atrous{last}, detail-stabilise (the output)
 //          -> specular: detail-specular-temporal (the reflection's history where the hit
 //             distance is given, else the surface's, capped by parallax and roughness)
 //             .. detail-specular-atrous{last} -> add-specular
@@ -30,6 +32,11 @@ namespace rtd {
 namespace {
 
 // What both signals' passes use in turn (frame lifetime).
+// The output's stabilisation (DetailStabiliseKernel): the previous frame's share where nothing
+// moved, the clamp's half width in standard deviations of the 3x3 neighbourhood, and the share's
+// fall with motion (a reflection on a moving surface is not held back; docs/quality.md).
+constexpr float kStabiliseBlend = 0.4f, kStabiliseClampSigma = 1.5f, kStabiliseFalloff = 4.0f;
+
 struct SharedImages {
     ResourceId derivatives, variance, filterA, filterB, validity, lagScale, currentSums;
     ResourceId lobe;  // the split signal's: roughness, hit distance (DetailSplitKernel)
@@ -58,13 +65,27 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     const ResourceId validity = shared.validity;
     const SvgfTerms terms{d.sigmaDepth, d.sigmaNormal, d.sigmaLuminance};
 
+    // The output's stabilisation (the signal that writes the output): its history, and that
+    // history reprojected by the temporal pass.
+    ResourceId stable, heldStable;
+    if (toOutput) {
+        stable = p.declare(floatImage("stableIllumination", 3, Lifetime::History));
+        heldStable = p.declare(floatImage("heldStable", 3));
+    }
+    const bool stabilises = toOutput;
+
     const HistoryTest test = historyTest(settings.history);
     std::vector<ResourceId> temporalReads = with(
         reprojectionReads(p, f),
         {derivatives, previous(slow), previous(fast), previous(moments), previous(length), in});
     if (specular) temporalReads.push_back(shared.lobe);
+    std::vector<ResourceId> temporalWrites{slow, fast, moments, length, validity};
+    if (stabilises) {
+        temporalReads.push_back(previous(stable));
+        temporalWrites.push_back(heldStable);
+    }
     p.addPass(passPrefix + "temporal", StepKind::DetailTemporalStage, temporalReads,
-              {slow, fast, moments, length, validity}, 2, [=](const PassContext& c) {
+              temporalWrites, 2, [=](const PassContext& c) {
                   GBufferView g = gbuffer(c, f);
                   const FrameBinding& frame = c.frame();
                   const PreviousGeometry before = previousGeometry(c, f);
@@ -93,6 +114,10 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                                                     float(d.maxHistory),
                                                     float(d.fastHistory),
                                                     d.momentsAlpha};
+                  if (stabilises) {
+                      reproject.previousStable = c.planes(previous(stable));
+                      accumulate.heldStable = c.planes(heldStable);
+                  }
                   DetailTemporalStageStep step{reproject, accumulate};
                   if (specular) {
                       step.onlyKeyed = g.filterKey;
@@ -158,9 +183,28 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                 specular ? g.filterKey : nullptr});
         });
 
-    return declareGuidedIterations(
+    const ResourceId filtered = declareGuidedIterations(
         p, f, passPrefix + "atrous", derivatives, variance, shared.filterA, shared.filterB,
-        specular ? d.specularIterations : d.iterations, terms, -1, {}, toOutput, specular);
+        specular ? d.specularIterations : d.iterations, terms, -1, {}, false, specular);
+    if (!stabilises) return filtered;
+
+    // The stabilisation, last: the residual noise a narrowed filter leaves would otherwise
+    // flicker from frame to frame (docs/quality.md). Before the specular passes, which reuse
+    // the validity and the anti-lag's ratios.
+    p.addPass("detail-stabilise", StepKind::DetailStabilise,
+              with(reprojectionReads(p, f),
+                   {filtered, heldStable, validity, lagScale, length, f.albedo}),
+              {stable, p.output()}, 1, [=](const PassContext& c) {
+                  c.device().run(DetailStabiliseStep{{gbuffer(c, f), c.planeSet(filtered),
+                                                      c.planes(heldStable), c.bytes(validity),
+                                                      c.floats(lagScale), c.floats(length),
+                                                      c.planes(stable),
+                                                      c.planes(f.albedo), c.output(),
+                                                      kStabiliseBlend, kStabiliseClampSigma,
+                                                      previousGeometry(c, f), c.objects(),
+                                                      c.frame().objectCount, kStabiliseFalloff}});
+              });
+    return filtered;
 }
 
 }  // namespace

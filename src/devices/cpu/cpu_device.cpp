@@ -142,6 +142,7 @@ class CpuDevice final : public Device {
         runDetailClampStep(s, [&](const auto& k) { launchWhereKeyed(k, s.onlyKeyed); });
     }
     void run(const DetailSplitStep& s) override { launch(s.split); }
+    void run(const DetailStabiliseStep& s) override { launch(s.stabilise); }
     void run(const AddToOutputStep& s) override { launchWhereKeyed(s.add, s.add.key); }
     void run(const ModulateStep& s) override { launch(s.modulate); }
 

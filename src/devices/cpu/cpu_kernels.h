@@ -59,6 +59,7 @@ namespace rtd {
     X(DetailSpecularFollowKernel)                 \
     X(DetailSpecularSurfaceKernel)                \
     X(DetailSplitKernel)                          \
+    X(DetailStabiliseKernel)                      \
     X(AddToOutputKernel)                          \
     X(DetailReprojectWhereKeyedKernel)            \
     X(DetailSpecularReprojectWhereKeyedKernel)    \

@@ -328,6 +328,7 @@ class CudaDevice final : public Device {
         runDetailClampStep(s, [this](const auto& k) { launch(k); });
     }
     void run(const DetailSplitStep& s) override { launch(s.split); }
+    void run(const DetailStabiliseStep& s) override { launch(s.stabilise); }
     void run(const AddToOutputStep& s) override { launch(s.add); }
     void run(const ModulateStep& s) override { launch(s.modulate); }
 
