@@ -118,8 +118,13 @@ struct DetailReproject {
         auto taps = findHistory<Search, KnownId>(g, i, previous, objects, objectCount,
                                                  slopesAt(derivatives, i), test, hasHistory, id);
         code = taps.code;
-        return gatherDetailHistory(taps, previousSlow, previousFast, previousMoments,
-                                   previousLength, previousStable);
+        DetailHistorySample s =
+            gatherDetailHistory(taps, previousSlow, previousFast, previousMoments,
+                                previousLength, Search ? Planes3{} : previousStable);
+        // The search's taps are a disocclusion's neighbours, not its own past: no output is
+        // held there (DetailStabilise; its values are otherwise >= 0).
+        if constexpr (Search) s.stable = make3(-1.0f, -1.0f, -1.0f);
+        return s;
     }
 };
 using DetailReprojectKernel = DetailReproject<false>;
@@ -317,7 +322,7 @@ struct DetailHistoryFixKernel {
 struct DetailStabiliseKernel {
     GBufferView g;
     PlaneSet current;               // the last A-Trous iteration's rgb (+ variance)
-    Planes3 held;                   // DetailAccumulate's heldStable
+    Planes3 held;                   // DetailAccumulate's heldStable (< 0: none)
     const std::uint8_t* validity;   // DetailReproject's codes
     const float* lagScale;          // DetailClamp's: 1 where the anti-lag did not fire
     const float* length;            // the history's length: 1 where none was kept (a caller's
@@ -376,7 +381,7 @@ struct DetailStabiliseKernel {
                             clampSigma;
         const Float3 previousValue = clamp3(held.load(i), mean - half, mean + half);
         const bool holds = key >= 0 && validity[i] == kReprojectionValid && length[i] > 1.0f &&
-                           lagScale[i] == 1.0f;
+                           lagScale[i] == 1.0f && held.load(i).x >= 0.0f;
         const float share = blend / (1.0f + motionFalloff * motionAt(x, y, i));
         const Float3 out = select3(holds, c + (previousValue - c) * share, c);
         stable.store(i, out);
