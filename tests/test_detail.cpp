@@ -179,6 +179,53 @@ TEST(DetailKernels, TheAntiLagBlendsTheHistoryAgainForItsCutLength) {
         }
 }
 
+// The stabilisation's known answer: on a +-0.1 checker around 1 (a 3x3 window's mean
+// 1 +- 0.1/9, standard deviation sqrt(0.01 - (0.1/9)^2)), a previous output of 2 is clamped to
+// mean + 1.5 sigma and blended in with 0.4; the output is that times the albedo. Where the
+// history was not found or kept, the anti-lag fired or nothing is held, the result passes as is.
+TEST(DetailKernels, TheStabilisationHoldsThePreviousOutputWithinTheNeighbourhood) {
+    const int w = 8, h = 6;
+    Harness hs(w, h, 2);
+    DeviceBuffer<float> current = hs.buffer(4), held = hs.buffer(3), lagScale = hs.buffer(1),
+                        length = hs.buffer(1), stable = hs.buffer(3), albedo = hs.buffer(3);
+    std::vector<float> rgbOut(std::size_t(w) * h * 3, -1.0f);
+    auto sign = [](int x, int y) { return (x + y) % 2 ? -1.0f : 1.0f; };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const auto i = hs.layout.index(x, y);
+            const float v = 1.0f + 0.1f * sign(x, y);
+            hs.planeSet(current).rgb().store(i, make3(v, v, v));
+            hs.planes(held).store(i, make3(2.0f, 2.0f, 2.0f));
+            hs.planes(albedo).store(i, make3(0.5f, 0.5f, 0.5f));
+            lagScale.data()[i] = 1.0f;
+            length.data()[i] = 5.0f;
+            hs.validity.data()[i] = kReprojectionValid;
+        }
+    // Interior pixels that must pass as they are, one per reason.
+    const int noHistory = hs.layout.index(1, 1), cut = hs.layout.index(3, 1),
+              antiLag = hs.layout.index(5, 1), nothingHeld = hs.layout.index(2, 3);
+    hs.validity.data()[noHistory] = kReprojectionOtherObject;
+    length.data()[cut] = 1.0f;
+    lagScale.data()[antiLag] = 1.2f;
+    hs.planes(held).store(nothingHeld, make3(-1.0f, -1.0f, -1.0f));
+    const DetailStabiliseKernel k{hs.gbuffer(),       hs.planeSet(current), hs.planes(held),
+                                  hs.validity.data(), lagScale.data(),      length.data(),
+                                  hs.planes(stable),  hs.planes(albedo),    rgbOut.data(),
+                                  0.4f,               1.5f,                 {},
+                                  nullptr,            0,                    4.0f};
+    hs.device->launch(k, w, h);
+    const float sigma = std::sqrt(0.01f - (0.1f / 9.0f) * (0.1f / 9.0f));
+    for (int y = 1; y < h - 1; ++y)
+        for (int x = 1; x < w - 1; ++x) {
+            const auto i = hs.layout.index(x, y);
+            const float c = 1.0f + 0.1f * sign(x, y), mean = 1.0f + 0.1f * sign(x, y) / 9.0f;
+            const bool passes = i == noHistory || i == cut || i == antiLag || i == nothingHeld;
+            const float want = passes ? c : c + (mean + 1.5f * sigma - c) * 0.4f;
+            ASSERT_NEAR(hs.planes(stable).load(i).y, want, 1e-5f) << x << ", " << y;
+            ASSERT_NEAR(rgbOut[(std::size_t(y) * w + x) * 3 + 1], 0.5f * want, 1e-5f);
+        }
+}
+
 // Confidence 0 everywhere drops the history: the frame's result is a fresh denoiser's.
 TEST(Detail, ZeroConfidenceGivesAFreshDenoisersResult) {
     DenoiserSettings s = test::cpuSettings(Method::Detail);
