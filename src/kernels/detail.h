@@ -53,12 +53,12 @@ RTD_HOST_DEVICE RTD_INLINE DetailHistorySample gatherDetailHistory(const History
     RTD_UNROLL
     for (int t = 0; t < kTaps; ++t)
         s.variance += (variances[t] + square(means[t] - s.mean)) * taps.weight[t];
-    if (previousStable.data) {
-        float r[kTaps], g[kTaps], b[kTaps];
-        loadTaps(previousStable, taps, r, g, b);
-        RTD_UNROLL
-        for (int t = 0; t < kTaps; ++t) s.stable += make3(r[t], g[t], b[t]) * taps.weight[t];
-    }
+    // Always loaded (a signal without a stabilised output passes other planes): a branch here
+    // stopped the CPU vectorising the reprojection.
+    float r[kTaps], g[kTaps], b[kTaps];
+    loadTaps(previousStable, taps, r, g, b);
+    RTD_UNROLL
+    for (int t = 0; t < kTaps; ++t) s.stable += make3(r[t], g[t], b[t]) * taps.weight[t];
     return s;
 }
 
@@ -81,7 +81,8 @@ struct DetailReproject {
     PlaneSet history;  // out: kDetailHistoryPlanes
     std::uint8_t* validity;
     int hasHistory;
-    Planes3 previousStable = {};  // DetailStabilise's history; data null: none
+    // DetailStabilise's history (a signal without one: any 3 planes, e.g. previousSlow).
+    Planes3 previousStable = {};
 
     RTD_HOST_DEVICE RTD_INLINE std::int32_t runKey(int x, int y) const {
         return g.objectId[g.layout.index(x, y)];
@@ -120,7 +121,7 @@ struct DetailReproject {
         code = taps.code;
         DetailHistorySample s =
             gatherDetailHistory(taps, previousSlow, previousFast, previousMoments,
-                                previousLength, Search ? Planes3{} : previousStable);
+                                previousLength, previousStable);
         // The search's taps are a disocclusion's neighbours, not its own past: no output is
         // held there (DetailStabilise; its values are otherwise >= 0).
         if constexpr (Search) s.stable = make3(-1.0f, -1.0f, -1.0f);
@@ -571,7 +572,8 @@ struct DetailSpecularReproject {
         RTD_UNROLL
         for (int t = 0; t < 4; ++t) taps.weight[t] *= inverseTotal;
         const DetailHistorySample reflected =
-            gatherDetailHistory(taps, previousSlow, previousFast, previousMoments, previousLength, {});
+            gatherDetailHistory(taps, previousSlow, previousFast, previousMoments, previousLength,
+                                previousSlow);  // no stabilised output
         if constexpr (SurfaceAfter) {
             DetailReprojectKernel::store(history, i, reflected);
             validity[i] = followed  ? std::uint8_t(kReprojectionValid)

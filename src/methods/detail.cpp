@@ -114,10 +114,8 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                                                     float(d.maxHistory),
                                                     float(d.fastHistory),
                                                     d.momentsAlpha};
-                  if (stabilises) {
-                      reproject.previousStable = c.planes(previous(stable));
-                      accumulate.heldStable = c.planes(heldStable);
-                  }
+                  reproject.previousStable = c.planes(previous(stabilises ? stable : slow));
+                  if (stabilises) accumulate.heldStable = c.planes(heldStable);
                   DetailTemporalStageStep step{reproject, accumulate};
                   if (specular) {
                       step.onlyKeyed = g.filterKey;
