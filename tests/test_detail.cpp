@@ -208,11 +208,21 @@ TEST(DetailKernels, TheStabilisationHoldsThePreviousOutputWithinTheNeighbourhood
     length.data()[cut] = 1.0f;
     lagScale.data()[antiLag] = 1.2f;
     hs.planes(held).store(nothingHeld, make3(-1.0f, -1.0f, -1.0f));
-    const DetailStabiliseKernel k{hs.gbuffer(),       hs.planeSet(current), hs.planes(held),
-                                  hs.validity.data(), lagScale.data(),      length.data(),
-                                  hs.planes(stable),  hs.planes(albedo),    rgbOut.data(),
-                                  0.4f,               1.5f,                 {},
-                                  nullptr,            0,                    4.0f};
+    const DetailStabiliseKernel k{hs.gbuffer(),
+                                  hs.planeSet(current),
+                                  hs.planes(held),
+                                  hs.validity.data(),
+                                  lagScale.data(),
+                                  length.data(),
+                                  hs.planes(stable),
+                                  hs.planes(albedo),
+                                  rgbOut.data(),
+                                  0.4f,
+                                  1.5f,
+                                  {},
+                                  nullptr,
+                                  0,
+                                  4.0f};
     hs.device->launch(k, w, h);
     const float sigma = std::sqrt(0.01f - (0.1f / 9.0f) * (0.1f / 9.0f));
     for (int y = 1; y < h - 1; ++y)

@@ -28,12 +28,9 @@ struct DetailHistorySample {
 // The previous frame's histories, weighted over the taps (the moments' variance includes the
 // spread of the taps' means).
 template <int kTaps>
-RTD_HOST_DEVICE RTD_INLINE DetailHistorySample gatherDetailHistory(const HistoryTaps<kTaps>& taps,
-                                                                   const Planes3& previousSlow,
-                                                                   const Planes3& previousFast,
-                                                                   const PlaneSet& previousMoments,
-                                                                   const float* previousLength,
-                                                                   const Planes3& previousStable) {
+RTD_HOST_DEVICE RTD_INLINE DetailHistorySample gatherDetailHistory(
+    const HistoryTaps<kTaps>& taps, const Planes3& previousSlow, const Planes3& previousFast,
+    const PlaneSet& previousMoments, const float* previousLength, const Planes3& previousStable) {
     float sr[kTaps], sg[kTaps], sb[kTaps], fr[kTaps], fg[kTaps], fb[kTaps];
     float means[kTaps], variances[kTaps], lengths[kTaps];
     loadTaps(previousSlow, taps, sr, sg, sb);
@@ -109,8 +106,8 @@ struct DetailReproject {
         h.rgb(9).store(i, s.stable);
     }
     RTD_HOST_DEVICE RTD_INLINE static DetailHistorySample load(const PlaneSet& h, PixelIndex i) {
-        return {h.rgb().load(i), h.rgb(3).load(i), h.at(6, i), h.at(7, i), h.at(8, i),
-                h.rgb(9).load(i)};
+        return {h.rgb().load(i), h.rgb(3).load(i), h.at(6, i),
+                h.at(7, i),      h.at(8, i),       h.rgb(9).load(i)};
     }
     // Search: the 3x3 search's taps rather than the bilinear ones.
     template <bool KnownId, bool Search = Search3x3>
@@ -119,9 +116,8 @@ struct DetailReproject {
         auto taps = findHistory<Search, KnownId>(g, i, previous, objects, objectCount,
                                                  slopesAt(derivatives, i), test, hasHistory, id);
         code = taps.code;
-        DetailHistorySample s =
-            gatherDetailHistory(taps, previousSlow, previousFast, previousMoments,
-                                previousLength, previousStable);
+        DetailHistorySample s = gatherDetailHistory(
+            taps, previousSlow, previousFast, previousMoments, previousLength, previousStable);
         // The search's taps are a disocclusion's neighbours, not its own past: no output is
         // held there (DetailStabilise; its values are otherwise >= 0).
         if constexpr (Search) s.stable = make3(-1.0f, -1.0f, -1.0f);
@@ -322,17 +318,17 @@ struct DetailHistoryFixKernel {
 // stabilised illumination (its history) and the output, times the albedo.
 struct DetailStabiliseKernel {
     GBufferView g;
-    PlaneSet current;               // the last A-Trous iteration's rgb (+ variance)
-    Planes3 held;                   // DetailAccumulate's heldStable (< 0: none)
-    const std::uint8_t* validity;   // DetailReproject's codes
-    const float* lagScale;          // DetailClamp's: 1 where the anti-lag did not fire
-    const float* length;            // the history's length: 1 where none was kept (a caller's
-                                    // confidence of 0 too)
-    Planes3 stable;                 // out (history)
+    PlaneSet current;              // the last A-Trous iteration's rgb (+ variance)
+    Planes3 held;                  // DetailAccumulate's heldStable (< 0: none)
+    const std::uint8_t* validity;  // DetailReproject's codes
+    const float* lagScale;         // DetailClamp's: 1 where the anti-lag did not fire
+    const float* length;           // the history's length: 1 where none was kept (a caller's
+                                   // confidence of 0 too)
+    Planes3 stable;                // out (history)
     Planes3 albedo;
-    float* rgbOut;                  // interleaved, 3 floats per pixel
-    float blend;                    // [0, 1) share of the previous frame's
-    float clampSigma;               // [> 0] the clamp's half width, standard deviations
+    float* rgbOut;     // interleaved, 3 floats per pixel
+    float blend;       // [0, 1) share of the previous frame's
+    float clampSigma;  // [> 0] the clamp's half width, standard deviations
     // Where the pixel moved, the share falls: blend / (1 + motionFalloff * pixels moved).
     PreviousGeometry previous;
     const ObjectReprojection* objects;
@@ -377,9 +373,10 @@ struct DetailStabiliseKernel {
         const float inverse = 1.0f / maxf(n, 1.0f);
         const Float3 mean = sum * inverse;
         const Float3 variance = squares * inverse - mean * mean;
-        const Float3 half = make3(std::sqrt(maxf(variance.x, 0.0f)), std::sqrt(maxf(variance.y, 0.0f)),
-                                  std::sqrt(maxf(variance.z, 0.0f))) *
-                            clampSigma;
+        const Float3 half =
+            make3(std::sqrt(maxf(variance.x, 0.0f)), std::sqrt(maxf(variance.y, 0.0f)),
+                  std::sqrt(maxf(variance.z, 0.0f))) *
+            clampSigma;
         const Float3 previousValue = clamp3(held.load(i), mean - half, mean + half);
         const bool holds = key >= 0 && validity[i] == kReprojectionValid && length[i] > 1.0f &&
                            lagScale[i] == 1.0f && held.load(i).x >= 0.0f;

@@ -84,8 +84,8 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
         temporalReads.push_back(previous(stable));
         temporalWrites.push_back(heldStable);
     }
-    p.addPass(passPrefix + "temporal", StepKind::DetailTemporalStage, temporalReads,
-              temporalWrites, 2, [=](const PassContext& c) {
+    p.addPass(passPrefix + "temporal", StepKind::DetailTemporalStage, temporalReads, temporalWrites,
+              2, [=](const PassContext& c) {
                   GBufferView g = gbuffer(c, f);
                   const FrameBinding& frame = c.frame();
                   const PreviousGeometry before = previousGeometry(c, f);
@@ -189,19 +189,16 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     // The stabilisation, last: the residual noise a narrowed filter leaves would otherwise
     // flicker from frame to frame (docs/quality.md). Before the specular passes, which reuse
     // the validity and the anti-lag's ratios.
-    p.addPass("detail-stabilise", StepKind::DetailStabilise,
-              with(reprojectionReads(p, f),
-                   {filtered, heldStable, validity, lagScale, length, f.albedo}),
-              {stable, p.output()}, 1, [=](const PassContext& c) {
-                  c.device().run(DetailStabiliseStep{{gbuffer(c, f), c.planeSet(filtered),
-                                                      c.planes(heldStable), c.bytes(validity),
-                                                      c.floats(lagScale), c.floats(length),
-                                                      c.planes(stable),
-                                                      c.planes(f.albedo), c.output(),
-                                                      kStabiliseBlend, kStabiliseClampSigma,
-                                                      previousGeometry(c, f), c.objects(),
-                                                      c.frame().objectCount, kStabiliseFalloff}});
-              });
+    p.addPass(
+        "detail-stabilise", StepKind::DetailStabilise,
+        with(reprojectionReads(p, f), {filtered, heldStable, validity, lagScale, length, f.albedo}),
+        {stable, p.output()}, 1, [=](const PassContext& c) {
+            c.device().run(DetailStabiliseStep{
+                {gbuffer(c, f), c.planeSet(filtered), c.planes(heldStable), c.bytes(validity),
+                 c.floats(lagScale), c.floats(length), c.planes(stable), c.planes(f.albedo),
+                 c.output(), kStabiliseBlend, kStabiliseClampSigma, previousGeometry(c, f),
+                 c.objects(), c.frame().objectCount, kStabiliseFalloff}});
+        });
     return filtered;
 }
 
