@@ -134,12 +134,13 @@ struct DetailTemporalStageStep {
 };
 
 // The ingest's image into the diffuse and specular signals (frames with a specular input).
-struct DetailStabiliseStep {
-    DetailStabiliseKernel stabilise;
-};
-
 struct DetailSplitStep {
     DetailSplitKernel split;
+};
+
+// The detail method's output: its result stabilised, times the albedo.
+struct DetailStabiliseStep {
+    DetailStabiliseKernel stabilise;
 };
 
 // The filtered specular signal added to the output.

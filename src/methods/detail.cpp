@@ -31,12 +31,12 @@ namespace rtd {
 
 namespace {
 
-// What both signals' passes use in turn (frame lifetime).
 // The output's stabilisation (DetailStabiliseKernel): the previous frame's share where nothing
 // moved, the clamp's half width in standard deviations of the 3x3 neighbourhood, and the share's
 // fall with motion (a reflection on a moving surface is not held back; docs/quality.md).
 constexpr float kStabiliseBlend = 0.4f, kStabiliseClampSigma = 1.5f, kStabiliseFalloff = 4.0f;
 
+// What both signals' passes use in turn (frame lifetime).
 struct SharedImages {
     ResourceId derivatives, variance, filterA, filterB, validity, lagScale, currentSums;
     ResourceId lobe;  // the split signal's: roughness, hit distance (DetailSplitKernel)
