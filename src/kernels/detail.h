@@ -335,19 +335,14 @@ struct DetailStabiliseKernel {
     int objectCount;
     float motionFalloff;  // [>= 0] per pixel of motion
 
-    // How far the pixel moved since the previous frame, in pixels (as findHistory finds it).
+    // How far the pixel moved since the previous frame, in pixels (previousPixel, as
+    // findHistory finds it).
     RTD_HOST_DEVICE RTD_INLINE float motionAt(int x, int y, PixelIndex i) const {
         if (objectCount <= 0) return 0.0f;  // no matrices: no history either (nothing held)
         const std::int32_t id = g.objectId[i];
         const bool covered = id >= 0 && id < objectCount;
-        const ObjectReprojection& object = objects[covered ? id : 0];
-        const Float4 s = transformPoint(object.currentWorldToPreviousScreen, g.position.load(i));
-        const bool fromMotion = previous.fromMotion != 0;
-        const Float3 moved = (fromMotion ? previous.motion : g.position).load(i);
-        const float inverseW = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
-        const float sx = fromMotion ? moved.x : s.x * inverseW - 0.5f;
-        const float sy = fromMotion ? moved.y : s.y * inverseW - 0.5f;
-        const float d = std::sqrt(square(sx - float(x)) + square(sy - float(y)));
+        const PreviousPixel before = previousPixel(g, i, previous, objects[covered ? id : 0]);
+        const float d = std::sqrt(square(before.x - float(x)) + square(before.y - float(y)));
         return d < 3.0e38f ? d : 3.0e38f;  // NaN: far
     }
 
@@ -377,9 +372,10 @@ struct DetailStabiliseKernel {
             make3(std::sqrt(maxf(variance.x, 0.0f)), std::sqrt(maxf(variance.y, 0.0f)),
                   std::sqrt(maxf(variance.z, 0.0f))) *
             clampSigma;
-        const Float3 previousValue = clamp3(held.load(i), mean - half, mean + half);
+        const Float3 heldHere = held.load(i);
+        const Float3 previousValue = clamp3(heldHere, mean - half, mean + half);
         const bool holds = key >= 0 && validity[i] == kReprojectionValid && length[i] > 1.0f &&
-                           lagScale[i] == 1.0f && held.load(i).x >= 0.0f;
+                           lagScale[i] == 1.0f && heldHere.x >= 0.0f;
         const float share = blend / (1.0f + motionFalloff * motionAt(x, y, i));
         const Float3 out = select3(holds, c + (previousValue - c) * share, c);
         stable.store(i, out);

@@ -40,6 +40,25 @@ struct PreviousGeometry {
     int fromMotion = 0;
 };
 
+// Where pixel i was in the previous frame: continuous coordinates in which pixel centres are
+// integers, and its expected view depth there. Motion vectors give both (the object's matrix is
+// the identity then, and its transform unused); else the object's matrix. Both ways are computed
+// and one selected: no branch. Without motion the position is loaded in their place: already
+// loaded, no memory traffic.
+struct PreviousPixel {
+    float x, y, depth;
+};
+RTD_HOST_DEVICE RTD_INLINE PreviousPixel previousPixel(const GBufferView& g, PixelIndex i,
+                                                       const PreviousGeometry& previous,
+                                                       const ObjectReprojection& object) {
+    const Float4 s = transformPoint(object.currentWorldToPreviousScreen, g.position.load(i));
+    const bool fromMotion = previous.fromMotion != 0;
+    const Float3 moved = (fromMotion ? previous.motion : g.position).load(i);
+    const float inverseW = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
+    return {fromMotion ? moved.x : s.x * inverseW - 0.5f,
+            fromMotion ? moved.y : s.y * inverseW - 0.5f, fromMotion ? moved.z : s.w};
+}
+
 // The previous-frame pixels that may hold pixel i's history, and their weights (summing to 1
 // when code is valid, all 0 otherwise). Without the 3x3 search: the bilinear 2x2 block. With it:
 // the 3x3 block around the nearest pixel, which always contains the 2x2 block, so one fixed set
@@ -107,19 +126,10 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     const ObjectReprojection& object = objects[covered ? id : 0];
     bool trackable = covered && hasHistory && object.valid;
 
-    Float3 position = g.position.load(i);
-    Float4 s = transformPoint(object.currentWorldToPreviousScreen, position);
-    // Motion vectors: the previous pixel and depth are given (the object's matrix is the
-    // identity then, and s unused). Both ways are computed and one selected: no branch.
-    // Without motion the position is loaded in their place: already loaded, no memory traffic.
-    bool fromMotion = previous.fromMotion != 0;
-    Float3 moved = (fromMotion ? previous.motion : g.position).load(i);
-    float expectedDepth = fromMotion ? moved.z : s.w;
+    const PreviousPixel before = previousPixel(g, i, previous, object);
+    float expectedDepth = before.depth;
     bool inFront = expectedDepth > 0.0f;  // false behind the previous camera, or NaN
-    float inverseW = 1.0f / (s.w > 0.0f ? s.w : 1.0f);
-    // Continuous coordinates in which pixel centres are integers.
-    float sx = fromMotion ? moved.x : s.x * inverseW - 0.5f;
-    float sy = fromMotion ? moved.y : s.y * inverseW - 0.5f;
+    float sx = before.x, sy = before.y;
     bool onScreen =
         inFront && sx > -1.0f && sx < float(L.width) && sy > -1.0f && sy < float(L.height);
     sx = onScreen ? sx : 0.0f;

@@ -43,8 +43,8 @@ struct SharedImages {
 };
 
 // One signal's histories and passes, from its despeckled image `in` to its filtered image (the
-// output, times the albedo, when toOutput; else returned). specular: the split signal's
-// specular part, with its own reprojection (DetailSpecularReproject).
+// output, stabilised and times the albedo, when toOutput; else returned). specular: the split
+// signal's specular part, with its own reprojection (DetailSpecularReproject).
 ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f,
                          const SharedImages& shared, ResourceId in, bool specular, bool toOutput) {
     const DetailSettings& d = settings.detail;
@@ -65,14 +65,13 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     const ResourceId validity = shared.validity;
     const SvgfTerms terms{d.sigmaDepth, d.sigmaNormal, d.sigmaLuminance};
 
-    // The output's stabilisation (the signal that writes the output): its history, and that
-    // history reprojected by the temporal pass.
+    // The output's stabilisation (toOutput: the signal that writes the output, stabilised): its
+    // history, and that history reprojected by the temporal pass.
     ResourceId stable, heldStable;
     if (toOutput) {
         stable = p.declare(floatImage("stableIllumination", 3, Lifetime::History));
         heldStable = p.declare(floatImage("heldStable", 3));
     }
-    const bool stabilises = toOutput;
 
     const HistoryTest test = historyTest(settings.history);
     std::vector<ResourceId> temporalReads = with(
@@ -80,7 +79,7 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
         {derivatives, previous(slow), previous(fast), previous(moments), previous(length), in});
     if (specular) temporalReads.push_back(shared.lobe);
     std::vector<ResourceId> temporalWrites{slow, fast, moments, length, validity};
-    if (stabilises) {
+    if (toOutput) {
         temporalReads.push_back(previous(stable));
         temporalWrites.push_back(heldStable);
     }
@@ -114,8 +113,8 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                                                     float(d.maxHistory),
                                                     float(d.fastHistory),
                                                     d.momentsAlpha};
-                  reproject.previousStable = c.planes(previous(stabilises ? stable : slow));
-                  if (stabilises) accumulate.heldStable = c.planes(heldStable);
+                  reproject.previousStable = c.planes(previous(toOutput ? stable : slow));
+                  if (toOutput) accumulate.heldStable = c.planes(heldStable);
                   DetailTemporalStageStep step{reproject, accumulate};
                   if (specular) {
                       step.onlyKeyed = g.filterKey;
@@ -184,7 +183,7 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     const ResourceId filtered = declareGuidedIterations(
         p, f, passPrefix + "atrous", derivatives, variance, shared.filterA, shared.filterB,
         specular ? d.specularIterations : d.iterations, terms, -1, {}, false, specular);
-    if (!stabilises) return filtered;
+    if (!toOutput) return filtered;
 
     // The stabilisation, last: the residual noise a narrowed filter leaves would otherwise
     // flicker from frame to frame (docs/quality.md). Before the specular passes, which reuse
