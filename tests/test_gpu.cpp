@@ -103,22 +103,35 @@ TEST(Gpu, CpuAndCudaAgreeOnTheCourseScene) {
 
 // Bad values a renderer writes (test_bad_values: radiance near the float maximum, zero,
 // non-finite and short normals): the GPU's result is finite, counts what the CPU counts, and
-// agrees with the CPU's, with the tile passes on and off.
+// agrees with the CPU's, with the tile passes on and off. Within 3 pixels of a pixel clamped to
+// kMaxRadiance (its firefly window) the bound is 1e-2: there the luminance weights' scale comes
+// from that pixel's variance, and each A-Trous iteration multiplies a rounding difference of
+// 1e-5 by 30-50 (svgf on an H200: 1.5e-5 after 3 iterations, 7e-4 after 4, 1.8e-3 after 5;
+// docs/performance-gpu.md, 2026-12-04).
 TEST(Gpu, CudaHandlesBadValuesAsTheCpuDoes) {
     std::string reason = cudaUnavailableReason();
     if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
-    std::vector<Frame> frames = test::renderSmallSequence("moving-objects", 64, 48, 4);
+    const int width = 64, height = 48;
+    std::vector<Frame> frames = test::renderSmallSequence("moving-objects", width, height, 4);
+    const int hugeAt[2][2] = {{10, 10}, {40, 30}};
     for (Frame& f : frames) {
-        f.beauty.at(10, 10, 0) = 3.4e38f;
-        f.beauty.at(40, 30, 1) = 1e20f;
+        f.beauty.at(hugeAt[0][0], hugeAt[0][1], 0) = 3.4e38f;
+        f.beauty.at(hugeAt[1][0], hugeAt[1][1], 1) = 1e20f;
         for (int y = 20; y < 28; ++y)
             for (int x = 20; x < 28; ++x)
                 for (int c = 0; c < 3; ++c) f.normal.at(x, y, c) = 0.0f;
         f.normal.at(50, 12, 0) = NAN;
         for (float& v : f.normal.pixels) v *= 0.8f;
     }
+    auto nearHugeValue = [&](std::size_t value) {
+        int x = int(value / 3) % width, y = int(value / 3) / width;
+        for (const auto& at : hugeAt)
+            if (std::abs(x - at[0]) <= 3 && std::abs(y - at[1]) <= 3) return true;
+        return false;
+    };
     for (TilePasses tiles : {TilePasses::On, TilePasses::Off}) {
-        for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf}) {
+        for (Method method :
+             {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf, Method::Detail}) {
             DenoiserSettings s;
             s.method = method;
             s.device = DeviceType::Cpu;
@@ -130,8 +143,15 @@ TEST(Gpu, CudaHandlesBadValuesAsTheCpuDoes) {
                 for (float v : b.pixels) ASSERT_TRUE(std::isfinite(v)) << toString(method);
                 EXPECT_EQ(gpu.lastFrameStats().radianceClamped, 2);
                 EXPECT_EQ(gpu.lastFrameStats().missingNormals, cpu.lastFrameStats().missingNormals);
-                EXPECT_LE(test::maxRelativeDifference(a, b), 1e-3)
-                    << toString(method) << ", frame " << i;
+                double far = 0.0, near = 0.0;
+                for (std::size_t k = 0; k < a.pixels.size(); ++k) {
+                    double d = std::abs(double(b.pixels[k]) - a.pixels[k]) /
+                               std::max(std::abs(double(a.pixels[k])), 1e-2);
+                    double& worst = nearHugeValue(k) ? near : far;
+                    worst = std::max(worst, d);
+                }
+                EXPECT_LE(far, 1e-3) << toString(method) << ", frame " << i;
+                EXPECT_LE(near, 1e-2) << toString(method) << ", frame " << i << ", near";
             }
         }
     }

@@ -253,8 +253,9 @@ SvgfReproject<Search3x3> svgfReprojectForm(const SvgfReprojectKernel& k) {
             k.validity,
             k.hasHistory};
 }
-template <int FixedSigmaNormal, bool Interleaved>
-SvgfVariance<FixedSigmaNormal, Interleaved> svgfVarianceForm(const SvgfVarianceKernel& k) {
+template <int FixedSigmaNormal, bool Interleaved, bool SkipsInactive = Interleaved>
+SvgfVariance<FixedSigmaNormal, Interleaved, SkipsInactive> svgfVarianceForm(
+    const SvgfVarianceKernel& k) {
     return {k.g,   k.derivatives, k.illumination, k.moments,  k.length,
             k.out, k.terms,       k.shortHistory, k.fadeUntil};
 }

@@ -303,7 +303,9 @@ using SvgfTemporalInterleavedKernel = SvgfTemporal<true>;
 // history, and those lie together (disocclusions), so the CPU launcher runs the vectorised body
 // only on runs of pixels with at least one active.
 // InterleavedGuide: the taps' normal and depth from g.normalDepth (views.h), the GPU's layout.
-template <int FixedSigmaNormal, bool InterleavedGuide = false>
+// SkipsInactive: inactive pixels return at once (the GPU's form, with either guide layout).
+template <int FixedSigmaNormal, bool InterleavedGuide = false,
+          bool SkipsInactive = InterleavedGuide>
 struct SvgfVariance {
     GBufferView g;
     PlaneSet derivatives;
@@ -340,11 +342,11 @@ struct SvgfVariance {
     }
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
-        // As in SvgfAtrous: the GPU's form (InterleavedGuide) skips inactive pixels by a branch;
+        // As in SvgfAtrous: the GPU's form (SkipsInactive) skips inactive pixels by a branch;
         // the CPU's computes every lane of an active run and keeps the inactive lanes' values
         // (a branch would mask every tap load).
         const bool isActive = active(x, y);
-        if constexpr (InterleavedGuide) {
+        if constexpr (SkipsInactive) {
             if (!isActive) return;
         }
         const Layout& L = g.layout;

@@ -90,8 +90,8 @@ struct LaunchTraits<SvgfTemporal<Interleaved>> : DefaultLaunch {
     static constexpr int kMinBlocks = 8;
 };
 // The planar variance (the interleaved one keeps the default, see above).
-template <int FixedSigmaNormal>
-struct LaunchTraits<SvgfVariance<FixedSigmaNormal, false>> : DefaultLaunch {
+template <int FixedSigmaNormal, bool SkipsInactive>
+struct LaunchTraits<SvgfVariance<FixedSigmaNormal, false, SkipsInactive>> : DefaultLaunch {
     static constexpr int kMinBlocks = 5;
 };
 template <class Kernel, int Stride>
@@ -308,7 +308,10 @@ class CudaDevice final : public Device {
     }
     // log2 is one instruction here: max(0, n.n')^sigma as exp2(sigma log2(n.n')) for any sigma.
     void run(const SvgfVarianceStep& s) override {
-        interleaved_ ? launch(svgfVarianceForm<-1, true>(s.variance)) : launch(s.variance);
+        // Either guide layout skips the pixels whose history is long by a branch (detail's
+        // guide is planar).
+        interleaved_ ? launch(svgfVarianceForm<-1, true>(s.variance))
+                     : launch(svgfVarianceForm<-1, false, true>(s.variance));
         if (s.historyFix.slow.data) launch(s.historyFix);
     }
     void run(const SvgfAtrousIterationStep& s) override {
