@@ -1,5 +1,5 @@
 """The install test's Python consumer: reads the rendered scene with the installed module's
-reader, denoises it (svgf, CPU, no albedo: what the raw buffers hold) and checks that its result
+reader, denoises it (the default method, CPU, no albedo: what the raw buffers hold) and checks that its result
 equals the C consumer's and the C++ consumer's (max relative difference <= 1e-6)."""
 import sys
 
@@ -8,7 +8,7 @@ import rtdenoise
 
 scene, packs = sys.argv[1], sys.argv[2]
 sequence = rtdenoise.open_sequence(scene)
-denoiser = rtdenoise.Denoiser(method="svgf", device="cpu")
+denoiser = rtdenoise.Denoiser(device="cpu")
 worst = {"c": 0.0, "cpp": 0.0}
 for i in range(len(sequence)):
     frame = sequence[i]

@@ -18,7 +18,7 @@ row() {
 "$bin" denoise "$fixture/noisy" -o "$out/input" --method atrous --atrous-passes 1 \
     --sigma-color 1e-6 --no-separate-objects --no-outlier --device cpu -q
 row input
-for method in jbf atrous temporal svgf; do
+for method in jbf atrous temporal svgf detail; do
     "$bin" denoise "$fixture/noisy" -o "$out/$method" --method "$method" --device cpu -q
     row "$method"
 done

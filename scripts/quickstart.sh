@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job on the embedded default input: installs the dependencies (Debian packages), builds,
 # renders the built-in moving-objects scene (320x240, 16 frames, 1 spp, 64-spp reference),
-# denoises it with the default method (svgf), writes the video and contact sheets, and prints
+# denoises it with the default method (detail), writes the video and contact sheets, and prints
 # the quality table against the reference.
 #   scripts/quickstart.sh [OUT_DIR]   (default out/quickstart)
 set -euo pipefail

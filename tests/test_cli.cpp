@@ -75,12 +75,12 @@ TEST(Cli, DenoisesASequenceIntoResultFiles) {
         std::string n = std::to_string(i);
         EXPECT_TRUE(fs::exists(dir.path() / "out" / ("result_" + n + ".exr")));
         EXPECT_TRUE(fs::exists(dir.path() / "out" / ("result_" + n + ".png")));
-        // The default method (svgf) writes all three debug views.
+        // The default method (detail) writes all three debug views.
         for (const char* view : {"reprojection_", "variance_", "history_"})
             EXPECT_TRUE(fs::exists(dir.path() / "out" / (view + n + ".png"))) << view << n;
     }
-    EXPECT_NE(r.output.find("frame 3/3"), std::string::npos) << r.output;      // progress
-    EXPECT_NE(r.output.find("svgf-temporal"), std::string::npos) << r.output;  // per-pass summary
+    EXPECT_NE(r.output.find("frame 3/3"), std::string::npos) << r.output;        // progress
+    EXPECT_NE(r.output.find("detail-temporal"), std::string::npos) << r.output;  // per-pass summary
     Image result = readExr(dir.path() / "out" / "result_2.exr", {{"R"}, {"G"}, {"B"}});
     EXPECT_EQ(result.width, 24);
     EXPECT_EQ(result.height, 16);

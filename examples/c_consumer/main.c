@@ -5,7 +5,7 @@
 int main(int argc, char** argv) {
     if (argc != 3) return fprintf(stderr, "usage: c_consumer DIR FRAMES\n"), 2;
     RTDDevice device = rtdNewDevice(RTD_DEVICE_CPU);
-    RTDDenoiser denoiser = rtdNewDenoiser(device, "svgf");
+    RTDDenoiser denoiser = rtdNewDenoiser(device, "detail");
     const char* message = "";
     for (int i = 0; i < atoi(argv[2]); ++i) {
         char path[4096];

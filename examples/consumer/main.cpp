@@ -12,7 +12,8 @@
 #include <string>
 #include <vector>
 
-// DIR/frame_<i>.raw (examples/c_consumer/main.c's layout) into DIR/cpp_result_<i>.raw with svgf.
+// DIR/frame_<i>.raw (examples/c_consumer/main.c's layout) into DIR/cpp_result_<i>.raw with the
+// default method (detail).
 int denoiseRawFrames(const std::string& dir, int frames) {
     rtd::DenoiserSettings settings;
     settings.device = rtd::DeviceType::Cpu;

@@ -12,7 +12,7 @@ import rtdenoise
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
 parser.add_argument("scene", nargs="?", default="out/quickstart/scene")
-parser.add_argument("--method", default="svgf", help="jbf, atrous, temporal, svgf")
+parser.add_argument("--method", default="detail", help="jbf, atrous, temporal, svgf, detail")
 parser.add_argument("--device", default="default", help="default, cpu, cuda")
 parser.add_argument("--out", help="also write result_<i>.exr into this folder")
 args, extra = parser.parse_known_args()

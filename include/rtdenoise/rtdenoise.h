@@ -104,7 +104,8 @@ RTD_API RTDError rtdSynchronize(RTDDevice device);
 
 /* ---- denoisers ---- */
 
-/* method: "jbf", "atrous", "temporal", "svgf" (NULL: the default, svgf). NULL on failure. */
+/* method: "jbf", "atrous", "temporal", "svgf", "detail" (NULL: the default, detail). NULL on
+ * failure. */
 RTD_API RTDDenoiser rtdNewDenoiser(RTDDevice device, const char* method);
 RTD_API void rtdRetainDenoiser(RTDDenoiser denoiser);
 RTD_API void rtdReleaseDenoiser(RTDDenoiser denoiser);

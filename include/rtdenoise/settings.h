@@ -95,7 +95,7 @@ struct SvgfSettings {
 struct DetailSettings {
     float sigmaDepth = 1.0f;      // [>=kMinSigma] depth tolerance relative to the local depth slope
     float sigmaNormal = 128.0f;   // [>=kMinSigma] exponent of max(0, n.n')
-    float sigmaLuminance = 4.0f;  // [>=kMinSigma] luminance tolerance in standard deviations of
+    float sigmaLuminance = 2.8f;  // [>=kMinSigma] luminance tolerance in standard deviations of
                                   // the accumulated mean
     int iterations = 5;           // [1, 10] A-Trous iterations, stride 2^i
     int specularIterations = 1;   // [1, 10] A-Trous iterations of the split signal's specular
@@ -125,7 +125,7 @@ struct TemporalSettings {
 };
 
 struct DenoiserSettings {
-    Method method = Method::Svgf;  // the best on every rendered scene (README quality table)
+    Method method = Method::Detail;  // the best on every rendered scene (README quality table)
     DeviceType device = DeviceType::Auto;
     EdgeStoppingSettings edges;
     JbfSettings jbf;

@@ -34,7 +34,7 @@ namespace {
 // The output's stabilisation (DetailStabiliseKernel): the previous frame's share where nothing
 // moved, the clamp's half width in standard deviations of the 3x3 neighbourhood, and the share's
 // fall with motion (a reflection on a moving surface is not held back; docs/quality.md).
-constexpr float kStabiliseBlend = 0.4f, kStabiliseClampSigma = 1.5f, kStabiliseFalloff = 4.0f;
+constexpr float kStabiliseBlend = 0.65f, kStabiliseClampSigma = 1.5f, kStabiliseFalloff = 4.0f;
 
 // What both signals' passes use in turn (frame lifetime).
 struct SharedImages {

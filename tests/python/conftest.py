@@ -55,7 +55,7 @@ def scene(cli, tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def cli_denoised(cli, scene, tmp_path_factory):
-    """The command's svgf results for `scene` on the CPU: result_<i>.exr."""
+    """The command's results (default method) for `scene` on the CPU: result_<i>.exr."""
     folder = tmp_path_factory.mktemp("cli_denoised")
     run_cli(cli, "denoise", scene, "-o", folder, "--device", "cpu", "-q")
     return folder
@@ -63,7 +63,8 @@ def cli_denoised(cli, scene, tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def cli_denoised_blender(cli, tmp_path_factory):
-    """The command's svgf results for the Cycles fixture (motion vectors, no matrices)."""
+    """The command's results (default method) for the Cycles fixture (motion vectors, no
+    matrices)."""
     folder = tmp_path_factory.mktemp("cli_blender")
     run_cli(cli, "denoise", BLENDER_FIXTURE / "noisy", "-o", folder, "--device", "cpu", "-q")
     return folder

@@ -66,7 +66,7 @@ def test_depth_or_position_alone_with_matrices_gives_the_full_result(plane):
 def test_matches_the_command_line_on_a_rendered_scene(scene, cli_denoised):
     sequence = rtdenoise.open_sequence(scene)
     assert len(sequence) == 4
-    den = rtdenoise.Denoiser("svgf", device="cpu")
+    den = rtdenoise.Denoiser(device="cpu")
     for i, frame in enumerate(sequence):
         result = den.denoise_frame(frame)
         expected = rtdenoise.read_exr(cli_denoised / f"result_{i}.exr")
@@ -86,7 +86,7 @@ def test_matches_the_command_line_on_blender_motion_vectors(cli_denoised_blender
 # ---- layouts: strides, float16, float64, out= ----
 
 
-def denoise_sequence(frames, method="svgf", transform=lambda inputs: inputs, out=None):
+def denoise_sequence(frames, method=None, transform=lambda inputs: inputs, out=None):
     den = rtdenoise.Denoiser(method, device="cpu")
     return [den.denoise(**transform(f.inputs()), out=out).copy() for f in frames]
 
