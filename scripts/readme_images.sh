@@ -14,7 +14,8 @@ trap 'rm -rf "$work"' EXIT
 "$bin" denoise "$box" -o "$work/atrous" --method atrous --png -q
 "$bin" denoise "$box" -o "$work/temporal" --method temporal --png --debug -q
 "$bin" denoise "$box" -o "$work/svgf" --method svgf --png -q
+"$bin" denoise "$box" -o "$work/detail" --method detail --png -q
 mkdir -p docs/images
-for m in input jbf atrous temporal svgf; do cp "$work/$m/result_19.png" "docs/images/box_$m.png"; done
+for m in input jbf atrous temporal svgf detail; do cp "$work/$m/result_19.png" "docs/images/box_$m.png"; done
 cp "$work/temporal/reprojection_19.png" docs/images/box_reprojection.png
-echo "wrote docs/images/box_{input,jbf,atrous,temporal,svgf,reprojection}.png"
+echo "wrote docs/images/box_{input,jbf,atrous,temporal,svgf,detail,reprojection}.png"
