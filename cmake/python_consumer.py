@@ -1,6 +1,7 @@
 """The install test's Python consumer: reads the rendered scene with the installed module's
-reader, denoises it (the default method, CPU, no albedo: what the raw buffers hold) and checks that its result
-equals the C consumer's and the C++ consumer's (max relative difference <= 1e-6)."""
+reader, denoises it (the default method, CPU, no albedo: what the raw buffers hold) and checks
+that its result equals the C consumer's and the C++ consumer's (max relative difference <=
+1e-6)."""
 import sys
 
 import numpy as np

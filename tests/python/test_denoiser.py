@@ -6,7 +6,7 @@ import pytest
 import rtdenoise
 from conftest import BLENDER_FIXTURE, max_relative_difference, rel_mse
 
-METHODS = ["jbf", "atrous", "temporal", "svgf"]
+METHODS = ["jbf", "atrous", "temporal", "svgf", "detail"]
 
 
 def cuda_available():
@@ -416,7 +416,9 @@ def test_missing_depth_and_position(plane):
 def test_temporal_methods_need_motion_or_matrices(plane):
     inputs = plane.inputs(np.zeros(plane.depth.shape + (3,), np.float32))
     del inputs["matrices"]
-    assert "motion or matrices" in str(error_of(rtdenoise.Denoiser(device="cpu").denoise, **inputs))
+    for method in ("temporal", "svgf", "detail"):
+        den = rtdenoise.Denoiser(method, device="cpu")
+        assert "motion or matrices" in str(error_of(den.denoise, **inputs)), method
 
 
 def test_ids_out_of_range_are_refused_and_keep_the_history(plane):
@@ -449,7 +451,7 @@ def test_cuda_without_a_gpu_raises_unsupported_device():
 
 @pytest.mark.skipif(not cuda_available(), reason="no CUDA device")
 def test_cuda_gives_the_cpu_result(frames, reference_results):
-    den = rtdenoise.Denoiser("svgf", device="cuda")
+    den = rtdenoise.Denoiser(device="cuda")  # the default method, as reference_results
     assert den.device_name.startswith("cuda")
     for frame, expected in zip(frames, reference_results):
         assert rel_mse(den.denoise_frame(frame), expected) < 1e-4
