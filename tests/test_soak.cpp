@@ -160,7 +160,8 @@ INSTANTIATE_TEST_SUITE_P(EveryMethod, Soak,
                          ::testing::Values(SoakCase{"jbf", method(Method::Jbf)},
                                            SoakCase{"atrous", method(Method::Atrous)},
                                            SoakCase{"temporal", method(Method::Temporal)},
-                                           SoakCase{"svgf", method(Method::Svgf)}),
+                                           SoakCase{"svgf", method(Method::Svgf)},
+                                           SoakCase{"detail", method(Method::Detail)}),
                          [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
