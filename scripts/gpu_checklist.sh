@@ -11,18 +11,7 @@ out="${1:-${OUT:-out/gpu}}" frames="${2:-200}"
 bin=build/release/rtdenoise
 mkdir -p "$out"
 status=0
-step() {  # step NAME COMMAND...: runs it, its output in OUT_DIR/NAME.log, and notes a failure
-    local name=$1
-    shift
-    echo "== $name: $*"
-    if "$@" > "$out/$name.log" 2>&1; then
-        tail -n 3 "$out/$name.log"
-    else
-        echo "   FAILED (exit $?), see $name.log"
-        tail -n 20 "$out/$name.log"
-        status=1
-    fi
-}
+. scripts/step.sh  # step NAME COMMAND...
 command -v nvidia-smi > /dev/null && nvidia-smi --query-gpu=name,driver_version,clocks.max.sm \
     --format=csv > "$out/gpu.txt" 2>&1
 git rev-parse --short HEAD > "$out/commit.txt" 2>/dev/null

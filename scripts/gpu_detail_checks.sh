@@ -14,19 +14,7 @@ bin=build/release/rtdenoise
 work=/tmp/rtd-detail-gpu
 mkdir -p "$out" "$work"
 status=0
-step() {  # step NAME COMMAND...: its output in OUT_DIR/NAME.log, the time it took, any failure
-    local name=$1 start=$SECONDS
-    shift
-    echo "== $name: $*"
-    if "$@" > "$out/$name.log" 2>&1; then
-        tail -n 4 "$out/$name.log"
-    else
-        echo "   FAILED (exit $?), see $name.log"
-        tail -n 25 "$out/$name.log"
-        status=1
-    fi
-    echo "   ($((SECONDS - start)) s)"
-}
+. scripts/step.sh  # step NAME COMMAND...
 command -v nvidia-smi > /dev/null && nvidia-smi --query-gpu=name,driver_version,clocks.max.sm \
     --format=csv > "$out/gpu.txt" 2>&1 && cat "$out/gpu.txt"
 step gpu-tests ctest --preset release -L gpu --output-on-failure
