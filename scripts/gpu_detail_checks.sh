@@ -6,7 +6,9 @@
 # Run from the repository root after `. .devcarry/setup.sh` (scripts/stage_gpu_run.sh).
 #   [BASELINE=other/rtdenoise] scripts/gpu_detail_checks.sh [OUT_DIR] [FRAMES]
 #   (default $OUT or out/gpu, 100 frames; BASELINE: also 3 rounds alternating it with this
-#   build on both 1080p inputs, for an A/B in one call)
+#   build on both 1080p inputs, for an A/B in one call). It leaves more logs than the device tool
+#   returns (8 files): there, give a folder under /tmp and copy its gpu_detail_checks.tar.gz
+#   into $OUT.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-${OUT:-out/gpu}}" frames="${2:-100}"
