@@ -378,7 +378,7 @@ class Denoiser:
     across denoise() calls (one frame per call). Not for two threads at once (one per thread or
     stream); the filtering itself runs without the GIL.
 
-    method: "jbf", "atrous", "temporal", "svgf" or "detail" (the default).
+    method: "jbf", "atrous", "temporal", "svgf" or "detail"; None: the library's default (detail).
     device: "default" (a CUDA GPU when there is one, else the CPU), "cpu" or "cuda".
     settings: the command line's options, underscores for hyphens (sigma_color=0.6,
     svgf_iterations=3, outlier=False, spatial_filter="jbf", depth_kind="ray-distance",
@@ -387,7 +387,7 @@ class Denoiser:
     build or machine lacks raises Error with code UNSUPPORTED_DEVICE.
     """
 
-    def __init__(self, method: Optional[str] = "detail", device: str = "default", **settings: Any):
+    def __init__(self, method: Optional[str] = None, device: str = "default", **settings: Any):
         if not isinstance(device, str) or device.lower() not in _DEVICES:
             raise InvalidArgumentError(
                 f"device: {device!r} is not one of 'default', 'cpu', 'cuda'"
@@ -395,7 +395,7 @@ class Denoiser:
         if method is not None and not isinstance(method, str):
             raise InvalidArgumentError(f"method: expected a name, got {type(method).__name__}")
         self._core = _native.Denoiser(method and method.lower(), _DEVICES[device.lower()])
-        self._method = method.lower() if method else "detail"
+        self._method = self._core.get("method")  # the library's name, the default's too
         self._depth_kind = "view-z"
         self._lock = threading.Lock()
         for name, value in settings.items():
@@ -430,7 +430,7 @@ class Denoiser:
             if key == "depth-kind":
                 self._depth_kind = str(value)
             elif key == "method":
-                self._method = str(value)
+                self._method = self._core.get("method")
 
     def _set_one(self, key: str, value: Any) -> None:
         if isinstance(value, (bool, np.bool_)):

@@ -26,11 +26,14 @@ struct DetailHistorySample {
 };
 
 // The previous frame's histories, weighted over the taps (the moments' variance includes the
-// spread of the taps' means).
-template <int kTaps>
-RTD_HOST_DEVICE RTD_INLINE DetailHistorySample gatherDetailHistory(
-    const HistoryTaps<kTaps>& taps, const Planes3& previousSlow, const Planes3& previousFast,
-    const PlaneSet& previousMoments, const float* previousLength, const Planes3& previousStable) {
+// spread of the taps' means). WithStable: also the stabilised output (else stable stays 0), a
+// kernel's compile-time choice: a run-time branch here stopped the CPU vectorising the
+// reprojection.
+template <bool WithStable = true, int kTaps>
+RTD_HOST_DEVICE RTD_INLINE DetailHistorySample
+gatherDetailHistory(const HistoryTaps<kTaps>& taps, const Planes3& previousSlow,
+                    const Planes3& previousFast, const PlaneSet& previousMoments,
+                    const float* previousLength, const Planes3& previousStable = {}) {
     float sr[kTaps], sg[kTaps], sb[kTaps], fr[kTaps], fg[kTaps], fb[kTaps];
     float means[kTaps], variances[kTaps], lengths[kTaps];
     loadTaps(previousSlow, taps, sr, sg, sb);
@@ -50,12 +53,12 @@ RTD_HOST_DEVICE RTD_INLINE DetailHistorySample gatherDetailHistory(
     RTD_UNROLL
     for (int t = 0; t < kTaps; ++t)
         s.variance += (variances[t] + square(means[t] - s.mean)) * taps.weight[t];
-    // Always loaded (a signal without a stabilised output passes other planes): a branch here
-    // stopped the CPU vectorising the reprojection.
-    float r[kTaps], g[kTaps], b[kTaps];
-    loadTaps(previousStable, taps, r, g, b);
-    RTD_UNROLL
-    for (int t = 0; t < kTaps; ++t) s.stable += make3(r[t], g[t], b[t]) * taps.weight[t];
+    if constexpr (WithStable) {
+        float r[kTaps], g[kTaps], b[kTaps];
+        loadTaps(previousStable, taps, r, g, b);
+        RTD_UNROLL
+        for (int t = 0; t < kTaps; ++t) s.stable += make3(r[t], g[t], b[t]) * taps.weight[t];
+    }
     return s;
 }
 
@@ -564,9 +567,8 @@ struct DetailSpecularReproject {
         const float inverseTotal = 1.0f / maxf(total, 1e-3f);
         RTD_UNROLL
         for (int t = 0; t < 4; ++t) taps.weight[t] *= inverseTotal;
-        const DetailHistorySample reflected =
-            gatherDetailHistory(taps, previousSlow, previousFast, previousMoments, previousLength,
-                                previousSlow);  // no stabilised output
+        const DetailHistorySample reflected = gatherDetailHistory<false>(
+            taps, previousSlow, previousFast, previousMoments, previousLength);
         if constexpr (SurfaceAfter) {
             DetailReprojectKernel::store(history, i, reflected);
             validity[i] = followed  ? std::uint8_t(kReprojectionValid)
