@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <optional>
 
+#include "core/checked_size.h"
 #include "devices/device.h"
 #include "methods/method.h"
 #include "rtdenoise/error.h"
@@ -41,12 +42,13 @@ void checkImage(const Image& image, int width, int height, int channels, const c
 }
 
 // Names the first out-of-range ID (the ingest counts them on the device; this runs on the host
-// only for a frame already known to hold one).
-void checkObjectIds(const std::int32_t* ids, int w, int h, int objectCount) {
+// only for a frame already known to hold one). fromFloats: the IDs were converted from floats,
+// where kUnreadableId marks a value that is not an integer; given as int32, it is INT_MIN.
+void checkObjectIds(const std::int32_t* ids, int w, int h, int objectCount, bool fromFloats) {
     std::size_t n = std::size_t(w) * h;
     for (std::size_t i = 0; i < n; ++i) {
         std::int32_t id = ids[i];
-        if (id == ConvertInputKernel::kUnreadableId)
+        if (fromFloats && id == ConvertInputKernel::kUnreadableId)
             throw Error(ErrorCode::InvalidInput,
                         fmt::format("frame: the object ID at pixel ({}, {}) is not an integer",
                                     i % w, i / w));
@@ -123,7 +125,18 @@ InputLayout inputLayout(const char* name, const ImageView& v, int width, int hei
                                 ownChannels, maxChannels));
     const std::size_t pixelBytes = std::size_t(view.channels) * valueBytes(view.type);
     if (view.pixelStride == 0) view.pixelStride = pixelBytes;
-    if (view.rowStride == 0) view.rowStride = std::size_t(width) * view.pixelStride;
+    const std::optional<std::size_t> packedRow = checkedProduct(std::size_t(width), view.pixelStride);
+    if (view.rowStride == 0 && packedRow) view.rowStride = *packedRow;
+    const std::optional<std::size_t> span =
+        packedRow ? imageSpanBytes(std::size_t(width), std::size_t(height), view.pixelStride,
+                                   view.rowStride, pixelBytes)
+                  : std::nullopt;
+    if (!span || !fitsAddressSpace(view.data, *span))
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("frame: {}: strides of {} bytes per pixel and {} per row over {}x{} "
+                                "pixels reach past the end of memory",
+                                name, view.pixelStride, view.rowStride, width, height));
+    // Within the span just checked: no product below overflows.
     if (view.pixelStride < pixelBytes ||
         view.rowStride < (width - 1) * view.pixelStride + pixelBytes)
         throw Error(ErrorCode::InvalidInput,
@@ -131,7 +144,7 @@ InputLayout inputLayout(const char* name, const ImageView& v, int width, int hei
                                 "small for {} values of {} bytes in rows of {} pixels",
                                 name, view.pixelStride, view.rowStride, view.channels,
                                 valueBytes(view.type), width));
-    l.spanBytes = (height - 1) * view.rowStride + (width - 1) * view.pixelStride + pixelBytes;
+    l.spanBytes = *span;
     const std::size_t ownBytes = std::size_t(ownChannels) * 4;
     l.packed = view.type == (ids ? DataType::Int32 : DataType::Float32) &&
                view.channels == ownChannels && view.pixelStride == ownBytes &&
@@ -238,6 +251,26 @@ struct Denoiser::Impl {
         stats.passMilliseconds.assign(pipeline.passes().size(), 0.0);
     }
 
+    // The passes declared anew for `next`; the images, and with them the history, kept where
+    // the passes and their resources are the same (a sigma, an alpha: values the passes read).
+    bool changeSettings(DenoiserSettings next) {
+        validate(next);
+        next.device = settings.device;  // the device is chosen once, at construction
+        Pipeline nextPipeline;
+        FrameImages nextImages = declareMethod(nextPipeline, next, declaredInputs);
+        // Demodulation changes what the history holds (illumination or radiance).
+        const bool sameHistoryMeaning = next.albedo.demodulate == settings.albedo.demodulate;
+        const bool kept = sameHistoryMeaning && layout().width > 0 &&
+                          nextPipeline.adoptImages(pipeline);
+        settings = next;
+        pipeline = std::move(nextPipeline);
+        images = nextImages;
+        stats.passMilliseconds.assign(pipeline.passes().size(), 0.0);
+        // Otherwise the next frame allocates the images anew (its size differs from the empty
+        // layout's), which starts a new history.
+        return kept;
+    }
+
     const Layout& layout() const { return pipeline.layout(); }
     std::size_t pixels() const { return std::size_t(layout().width) * layout().height; }
 
@@ -335,11 +368,11 @@ struct Denoiser::Impl {
     }
 
     // One matrix per object: current world -> object -> previous world (-> previous screen).
-    // With motion vectors: the identity for every object (the previous position is the
-    // pixel's own; normals are compared unrotated).
+    // With motion vectors: one identity, which the kernels read for every object
+    // (objectEntry; the previous position is the pixel's own, normals are compared unrotated).
     void uploadObjectMatrices(const FrameView& f) {
-        std::size_t count = std::size_t(f.objectCount);
         const bool fromMotion = bool(f.motion);
+        const std::size_t count = fromMotion ? 1 : std::size_t(f.objectCount);
         hostObjects.resize(count);
         for (std::size_t k = 0; k < count; ++k) {
             ObjectReprojection& o = hostObjects[k];
@@ -380,9 +413,11 @@ struct Denoiser::Impl {
         if (f.width != layout().width || f.height != layout().height) allocate(f.width, f.height);
 
         auto start = Clock::now();
+        stats.pixels = (long long)pixels();
         bindInputs(f);
+        // The single-frame methods keep the guide and IDs too, but read no matrices.
         const bool temporal = pipeline.keepsHistory();
-        if (temporal) uploadObjectMatrices(f);
+        if (usesHistory(settings.method)) uploadObjectMatrices(f);
         stats.uploadMilliseconds = millisecondsSince(start);
 
         const bool direct = device->sharesHostMemory() || f.space == MemorySpace::Device;
@@ -463,7 +498,7 @@ struct Denoiser::Impl {
         }
 
         // This frame's geometry and output are the next frame's history.
-        if (f.motion)
+        if (f.motion || !temporal || !f.objectToWorld)
             previousObjectToWorld.clear();
         else
             previousObjectToWorld.assign(f.objectToWorld, f.objectToWorld + f.objectCount);
@@ -483,6 +518,8 @@ struct Denoiser::Impl {
         stats.nonFiniteReplaced = flags.nonFinite;
         stats.radianceClamped = flags.clamped;
         stats.missingNormals = flags.missingNormals;
+        stats.nonFiniteGeometry = flags.nonFiniteGeometry;
+        stats.backgroundPixels = flags.background;
     }
 
     // The queued frames' statistics (the last one's times, all their flags summed).
@@ -518,18 +555,29 @@ struct Denoiser::Impl {
         if (missing)
             throw Error(ErrorCode::InvalidInput,
                         fmt::format("frame: the {} buffer is missing", missing));
-        if (f.objectCount < 0 || (f.objectCount > 0 && !f.motion && !f.objectToWorld))
+        // The single-frame methods read no matrices: objectCount alone bounds their IDs.
+        if (f.objectCount < 0 ||
+            (f.objectCount > 0 && !f.motion && !f.objectToWorld && usesHistory(settings.method)))
             throw Error(ErrorCode::InvalidInput,
                         "frame: objectToWorld is missing (or give motion vectors)");
         checkSplitSignal(bool(f.specular), bool(f.roughness), bool(f.hitDistance));
         if (!out.data) throw Error(ErrorCode::InvalidInput, "frame: the output buffer is missing");
         const std::size_t outPixelBytes = out.channels * valueBytes(out.type);
+        const std::size_t outPixel = out.pixelStride ? out.pixelStride : outPixelBytes;
+        const std::optional<std::size_t> outRow = checkedProduct(std::size_t(f.width), outPixel);
+        const std::optional<std::size_t> outSpan =
+            outRow ? imageSpanBytes(std::size_t(f.width), std::size_t(f.height), outPixel,
+                                    out.rowStride ? out.rowStride : *outRow, outPixelBytes)
+                   : std::nullopt;
+        if (!outSpan || !fitsAddressSpace(out.data, *outSpan))
+            throw Error(ErrorCode::InvalidArgument,
+                        fmt::format("frame: the output's strides of {} bytes per pixel and {} per "
+                                    "row over {}x{} pixels reach past the end of memory",
+                                    out.pixelStride, out.rowStride, f.width, f.height));
         if ((out.type != DataType::Float32 && out.type != DataType::Float16) ||
             (out.channels != 3 && out.channels != 4) ||
             (out.pixelStride != 0 && out.pixelStride < outPixelBytes) ||
-            (out.rowStride != 0 &&
-             out.rowStride < (f.width - 1) * (out.pixelStride ? out.pixelStride : outPixelBytes) +
-                                 outPixelBytes))
+            (out.rowStride != 0 && out.rowStride < (f.width - 1) * outPixel + outPixelBytes))
             throw Error(ErrorCode::InvalidInput,
                         "frame: the output must be float or half, 3 or 4 channels, with strides "
                         "that hold them");
@@ -542,7 +590,8 @@ struct Denoiser::Impl {
     [[noreturn]] void throwBadObjectId(const FrameView& f) {
         std::vector<std::int32_t> ids(pixels());
         device->copyToHost(ids.data(), inId.device, ids.size() * sizeof(std::int32_t));
-        checkObjectIds(ids.data(), f.width, f.height, f.objectCount);
+        checkObjectIds(ids.data(), f.width, f.height, f.objectCount,
+                       f.objectId.type != DataType::Int32);
         throw Error(ErrorCode::InvalidInput, "frame: an object ID is outside -1..objectCount-1");
     }
 };
@@ -585,6 +634,9 @@ void Denoiser::synchronize() {
 void Denoiser::reset() {
     impl_->hasHistory = false;
 }
+bool Denoiser::changeSettings(const DenoiserSettings& settings) {
+    return impl_->changeSettings(settings);
+}
 const DenoiserSettings& Denoiser::settings() const {
     return impl_->settings;
 }
@@ -603,6 +655,29 @@ std::string Denoiser::deviceName() const {
 }
 Image Denoiser::debugImage(DebugView view) const {
     return impl_->pipeline.debugImage(*impl_->device, view);
+}
+
+std::string inputWarning(const FrameStats& s) {
+    if (s.pixels <= 0) return {};
+    // A broken pass leaves most of a frame so; a real frame has a few such pixels at most.
+    constexpr double kMostOfTheFrame = 0.5;
+    // Every pixel (but a few) of ID -1: a broken ID pass, or a frame of sky alone.
+    constexpr double kAllOfTheFrame = 0.99;
+    const double pixels = double(s.pixels);
+    const auto percent = [&](long long count) { return 100.0 * double(count) / pixels; };
+    if (double(s.nonFiniteGeometry) > kMostOfTheFrame * pixels)
+        return fmt::format("{:.0f} % of the pixels have a NaN or Inf depth or position: read as "
+                           "background, they pass through undenoised",
+                           percent(s.nonFiniteGeometry));
+    if (double(s.missingNormals) > kMostOfTheFrame * pixels)
+        return fmt::format("{:.0f} % of the pixels have a zero or non-finite normal: filtered "
+                           "without their normal terms",
+                           percent(s.missingNormals));
+    if (double(s.backgroundPixels) >= kAllOfTheFrame * pixels)
+        return fmt::format("{:.0f} % of the pixels are background (object ID -1 or out of range): "
+                           "they pass through undenoised",
+                           percent(s.backgroundPixels));
+    return {};
 }
 
 }  // namespace rtd

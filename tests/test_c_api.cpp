@@ -3,8 +3,16 @@
 // message without crashing; settings have the command line's names.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
+#include <atomic>
+#include <climits>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <thread>
 #include <regex>
 #include <set>
 #include <string>
@@ -159,9 +167,26 @@ TEST_F(CApi, DenoisersSharingADeviceKeepTheirOwnHistory) {
     rtdReleaseDenoiser(second);
 }
 
-// A setting changed after frames starts a new history: the next frame is what a fresh
-// denoiser with that setting gives.
-TEST_F(CApi, ChangingASettingStartsANewHistory) {
+// An engine that sets its parameters before every frame: setting a value it already has keeps
+// the history, so every frame is the normal run's (issue 37: each frame was a first frame).
+TEST_F(CApi, SettingAValueAgainKeepsTheHistory) {
+    Denoiser reference(cpuSettings(Method::Svgf));
+    for (const Frame& f : frames_) {
+        std::vector<float> out;
+        ASSERT_EQ(rtdSetFloat(denoiser_, "sigma-color", 0.6f), RTD_ERROR_NONE);
+        ASSERT_EQ(rtdSetFloat(denoiser_, "svgf-sigma-luminance", 4.0f), RTD_ERROR_NONE);
+        ASSERT_EQ(rtdSetInt(denoiser_, "svgf-iterations", 5), RTD_ERROR_NONE);
+        ASSERT_EQ(rtdSetString(denoiser_, "method", "svgf"), RTD_ERROR_NONE);
+        bind(f, out);
+        ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE) << takeError(device_).message;
+        EXPECT_EQ(reference.processFrame(f).pixels, out);
+    }
+}
+
+// A value a pass merely reads (a sigma) takes effect at the next frame, over the history kept:
+// what a denoiser that changed it between the same frames gives, not a fresh denoiser's first
+// frame. A value that changes the passes (the iteration count) starts a new history.
+TEST_F(CApi, ASigmaTakesEffectAtTheNextFrameOverTheKeptHistory) {
     std::vector<float> out;
     bind(frames_[0], out);
     ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
@@ -170,13 +195,37 @@ TEST_F(CApi, ChangingASettingStartsANewHistory) {
     bind(frames_[1], out);
     ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
     DenoiserSettings s = cpuSettings(Method::Svgf);
+    Denoiser changed(s);
+    changed.processFrame(frames_[0]);
     s.svgf.sigmaLuminance = 2.0f;
-    EXPECT_EQ(Denoiser(s).processFrame(frames_[1]).pixels, out);
-    // rtdReset: the same.
+    EXPECT_TRUE(changed.changeSettings(s));
+    EXPECT_EQ(changed.processFrame(frames_[1]).pixels, out);
+    EXPECT_NE(Denoiser(s).processFrame(frames_[1]).pixels, out);  // the history was used
+
+    ASSERT_EQ(rtdSetInt(denoiser_, "svgf-iterations", 3), RTD_ERROR_NONE);
     bind(frames_[2], out);
+    ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
+    s.svgf.iterations = 3;
+    EXPECT_FALSE(changed.changeSettings(s));
+    EXPECT_EQ(Denoiser(s).processFrame(frames_[2]).pixels, out);
+    // rtdReset: a first frame too.
+    bind(frames_[3], out);
     ASSERT_EQ(rtdReset(denoiser_), RTD_ERROR_NONE);
     ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
-    EXPECT_EQ(Denoiser(s).processFrame(frames_[2]).pixels, out);
+    EXPECT_EQ(Denoiser(s).processFrame(frames_[3]).pixels, out);
+}
+
+// A refused value leaves the settings and the history as they were.
+TEST_F(CApi, ARefusedSettingKeepsTheHistory) {
+    Denoiser reference(cpuSettings(Method::Svgf));
+    for (const Frame& f : frames_) {
+        std::vector<float> out;
+        EXPECT_EQ(rtdSetFloat(denoiser_, "svgf-alpha", 2.0f), RTD_ERROR_INVALID_ARGUMENT);
+        takeError(device_);
+        bind(f, out);
+        ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
+        EXPECT_EQ(reference.processFrame(f).pixels, out);
+    }
 }
 
 // Half RGBA colour with a row pitch gives what the packed float colour gives, to half precision.
@@ -584,6 +633,245 @@ TEST_F(CApi, SettingsHaveTheCommandLinesNames) {
     // --motion-scale X,Y is two settings.
     EXPECT_FLOAT_EQ(rtdGetFloat(denoiser_, "motion-scale-x"), 1.0f);
     EXPECT_FLOAT_EQ(rtdGetFloat(denoiser_, "motion-scale-y"), 1.0f);
+}
+
+
+// ---- issue 37: sizes, strides, object counts, threads, memory, IDs, broken passes ----
+
+// Binds every input of a w x h frame to `pixels` (zeros read as ID 0 and depth 0) and the
+// output to `output`, on `d`: for calls that must be refused before any pixel is read.
+void bindAll(RTDDenoiser d, const void* pixels, void* output, std::size_t w, std::size_t h) {
+    for (const char* name : {"color", "normal", "position"})
+        ASSERT_EQ(rtdSetImage(d, name, pixels, RTD_FORMAT_FLOAT3, w, h, 0, 0), RTD_ERROR_NONE);
+    ASSERT_EQ(rtdSetImage(d, "depth", pixels, RTD_FORMAT_FLOAT, w, h, 0, 0), RTD_ERROR_NONE);
+    ASSERT_EQ(rtdSetImage(d, "ids", pixels, RTD_FORMAT_INT, w, h, 0, 0), RTD_ERROR_NONE);
+    ASSERT_EQ(rtdSetImage(d, "output", output, RTD_FORMAT_FLOAT3, w, h, 0, 0), RTD_ERROR_NONE);
+}
+
+// (width - 1) * stride used to wrap around to a small span that passed the check (then a
+// segfault in rtdExecute); a width of INT_MAX overflowed the planes' pitch ("out of memory").
+TEST_F(CApi, StridesAndSizesThatOverflowAreInvalidArguments) {
+    std::vector<float> pixels(16 * 3);
+    const std::size_t huge = std::size_t(1) << 63;
+    EXPECT_EQ(rtdSetImage(denoiser_, "color", pixels.data(), RTD_FORMAT_FLOAT3, 3, 3, huge, 16),
+              RTD_ERROR_INVALID_ARGUMENT);
+    LastError e = takeError(device_);
+    EXPECT_NE(e.message.find("color: strides of"), std::string::npos) << e.message;
+    EXPECT_EQ(rtdSetImage(denoiser_, "color", pixels.data(), RTD_FORMAT_FLOAT3, 3, 3, 12, huge),
+              RTD_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(rtdSetImage(denoiser_, "color", pixels.data(), RTD_FORMAT_FLOAT3, 2, 2,
+                          SIZE_MAX / 2 + 1, 0),
+              RTD_ERROR_INVALID_ARGUMENT);
+    takeError(device_);
+
+    // Nothing is read: the size is refused first.
+    std::vector<float> output(3);
+    bindAll(denoiser_, pixels.data(), output.data(), INT_MAX, 1);
+    ASSERT_EQ(rtdSetObjectCount(denoiser_, 1), RTD_ERROR_NONE);
+    ASSERT_EQ(rtdSetImage(denoiser_, "motion", pixels.data(), RTD_FORMAT_FLOAT2, INT_MAX, 1, 0, 0),
+              RTD_ERROR_NONE);
+    EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_INVALID_ARGUMENT);
+    e = takeError(device_);
+    EXPECT_NE(e.message.find("too large"), std::string::npos) << e.message;
+}
+
+// The same hole in the C++ FrameView's check.
+TEST(FrameViewChecks, AStrideThatOverflowsIsRefusedNamingTheImage) {
+    const std::vector<Frame> frames = renderSmallSequence("moving-objects", 16, 8, 1);
+    Denoiser denoiser(cpuSettings(Method::Atrous));
+    FrameView view = viewOf(frames[0]);
+    view.normal = ImageView(view.normal.data, DataType::Float32, 3, std::size_t(1) << 63, 0);
+    std::vector<float> out(16 * 8 * 3);
+    try {
+        denoiser.processFrame(view, out.data());
+        FAIL() << "a stride of 2^63 was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+        EXPECT_NE(std::string(e.what()).find("normal: strides of"), std::string::npos) << e.what();
+    }
+    view = viewOf(frames[0]);
+    view.depth = ImageView(view.depth.data, DataType::Float32, 1, 4, std::size_t(1) << 62);
+    EXPECT_THROW(denoiser.processFrame(view, out.data()), Error);
+}
+
+// The peak resident memory of this process, in MiB.
+double peakResidentMiB() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_maxrss) / 1024.0;
+}
+
+// A single-frame method reads no matrices: 30 million objects cost nothing (issue 37: 5.7 GB of
+// identity matrices for a 64x48 frame).
+TEST_F(CApi, AnObjectCountCostsNothingWithoutMatrices) {
+    const Frame& f = frames_[0];
+    RTDDenoiser jbf = rtdNewDenoiser(device_, "jbf");
+    const std::size_t w = 64, h = 48;
+    std::vector<float> out(3 * w * h);
+    rtdSetImage(jbf, "color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(jbf, "normal", f.normal.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(jbf, "position", f.position.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(jbf, "depth", f.depth.pixels.data(), RTD_FORMAT_FLOAT, w, h, 0, 0);
+    rtdSetImage(jbf, "ids", f.objectId.data(), RTD_FORMAT_INT, w, h, 0, 0);
+    rtdSetImage(jbf, "output", out.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    ASSERT_EQ(rtdSetObjectCount(jbf, 30000000), RTD_ERROR_NONE);
+    const double before = peakResidentMiB();
+    ASSERT_EQ(rtdExecute(jbf), RTD_ERROR_NONE) << takeError(device_).message;
+    EXPECT_LT(peakResidentMiB() - before, 200.0);
+    Frame withoutAlbedo = f;
+    withoutAlbedo.albedo.reset();
+    EXPECT_EQ(Denoiser(cpuSettings(Method::Jbf)).processFrame(withoutAlbedo).pixels, out);
+    rtdReleaseDenoiser(jbf);
+}
+
+// A call repeated while another thread holds the denoiser (INVALID_OPERATION); its final code.
+template <class Call>
+RTDError whenFree(RTDDevice device, Call&& call) {
+    RTDError code;
+    while ((code = call()) == RTD_ERROR_INVALID_OPERATION) takeError(device);
+    return code;
+}
+
+// One denoiser from two threads at once (documented as not allowed) was a heap-use-after-free:
+// while one thread's call runs, another thread's calls on that denoiser are refused with
+// INVALID_OPERATION, and the first thread's frames are what they would be alone.
+TEST_F(CApi, ASecondThreadIsRefusedWhileACallRuns) {
+    std::atomic<bool> done{false};
+    std::atomic<int> refused{0}, accepted{0};
+    std::thread second([&] {
+        while (!done.load()) {
+            const float value = rtdGetFloat(denoiser_, "svgf-alpha");
+            if (takeError(device_).code == RTD_ERROR_INVALID_OPERATION)
+                refused.fetch_add(1);
+            else if (value == 0.2f)
+                accepted.fetch_add(1);
+        }
+    });
+    Denoiser reference(cpuSettings(Method::Svgf));
+    int frames = 0;
+    for (int round = 0; round < 20 && (refused.load() == 0 || frames < 8); ++round)
+        for (const Frame& f : frames_) {
+            const std::size_t w = std::size_t(f.width()), h = std::size_t(f.height());
+            std::vector<float> out(w * h * 3);
+            const std::vector<float> matrices = flatMatrices(f), camera = flat(f.worldToCamera),
+                                     screen = flat(f.worldToScreen);
+            auto image = [&](const char* name, const void* data, RTDFormat format) {
+                ASSERT_EQ(whenFree(device_,
+                                   [&] {
+                                       return rtdSetImage(denoiser_, name, data, format, w, h, 0,
+                                                          0);
+                                   }),
+                          RTD_ERROR_NONE);
+            };
+            image("color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3);
+            image("normal", f.normal.pixels.data(), RTD_FORMAT_FLOAT3);
+            image("position", f.position.pixels.data(), RTD_FORMAT_FLOAT3);
+            image("depth", f.depth.pixels.data(), RTD_FORMAT_FLOAT);
+            image("ids", f.objectId.data(), RTD_FORMAT_INT);
+            image("albedo", f.albedo ? f.albedo->pixels.data() : nullptr, RTD_FORMAT_FLOAT3);
+            image("output", out.data(), RTD_FORMAT_FLOAT3);
+            ASSERT_EQ(whenFree(device_,
+                               [&] {
+                                   return rtdSetMatrices(denoiser_, matrices.data(),
+                                                         int(f.objectToWorld.size()),
+                                                         camera.data(), screen.data());
+                               }),
+                      RTD_ERROR_NONE);
+            ASSERT_EQ(whenFree(device_, [&] { return rtdExecute(denoiser_); }), RTD_ERROR_NONE);
+            EXPECT_EQ(reference.processFrame(f).pixels, out);
+            ++frames;
+        }
+    done = true;
+    second.join();
+    EXPECT_GT(refused.load(), 0);
+    EXPECT_GT(accepted.load(), 0);  // between two calls the other thread's run
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+#define RTD_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define RTD_UNDER_ASAN 1
+#endif
+#endif
+
+// Denoises a 2048x2048 svgf frame with the address space capped a little above what the process
+// holds before the denoiser's images (about 600 MB) are allocated; prints the error message and
+// returns the code.
+int denoiseWithCappedMemory() {
+    RTDDevice device = rtdNewDevice(RTD_DEVICE_CPU);
+    RTDDenoiser d = rtdNewDenoiser(device, "svgf");
+    const std::size_t w = 2048, h = 2048;
+    std::vector<float> pixels(3 * w * h), output(3 * w * h);
+    const std::vector<float> identity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    bindAll(d, pixels.data(), output.data(), w, h);
+    rtdSetMatrices(d, identity.data(), 1, identity.data(), identity.data());
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    long long kib = 0;
+    while (std::getline(status, line))
+        if (line.rfind("VmSize:", 0) == 0) kib = std::stoll(line.substr(7));
+    rlimit cap{};
+    cap.rlim_cur = cap.rlim_max = rlim_t(kib + 150 * 1024) * 1024;
+    setrlimit(RLIMIT_AS, &cap);
+    const RTDError code = rtdExecute(d);
+    const char* message = nullptr;
+    rtdGetDeviceError(device, &message);
+    std::fprintf(stderr, "%s\n", message ? message : "");
+    return int(code);
+}
+
+// A failed CPU allocation is RTD_ERROR_OUT_OF_MEMORY (was DEVICE_FAILURE), in a child process.
+TEST(CApiMemory, AFailedAllocationIsOutOfMemory) {
+#ifdef RTD_UNDER_ASAN
+    GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: no cap can be set";
+#else
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    EXPECT_EXIT(std::exit(denoiseWithCappedMemory()),
+                ::testing::ExitedWithCode(RTD_ERROR_OUT_OF_MEMORY),
+                "rtdExecute: cpu: out of memory");
+#endif
+}
+
+// An int32 ID of INT_MIN is out of range, not "not an integer" (the float IDs' mark).
+TEST_F(CApi, AnIdOfIntMinIsOutOfRange) {
+    std::vector<float> out;
+    bind(frames_[0], out);
+    std::vector<std::int32_t> ids = frames_[0].objectId;
+    ids[3] = INT_MIN;
+    rtdSetImage(denoiser_, "ids", ids.data(), RTD_FORMAT_INT, 64, 48, 0, 0);
+    EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_INVALID_INPUT);
+    const LastError e = takeError(device_);
+    EXPECT_NE(e.message.find("object ID -2147483648 at pixel (3, 0) is outside -1.."),
+              std::string::npos)
+        << e.message;
+}
+
+// A frame with no usable geometry (depth all NaN, every ID -1) is passed through as it came:
+// rtdExecute succeeds, and rtdGetFrameWarning says why; a normal frame has no warning.
+TEST_F(CApi, AFrameWithoutUsableGeometryIsReported) {
+    std::vector<float> out;
+    bind(frames_[0], out);
+    ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
+    EXPECT_STREQ(rtdGetFrameWarning(denoiser_), "");
+    const Frame& f = frames_[1];
+    std::vector<float> nanDepth(f.depth.pixels.size(), std::nanf(""));
+    bind(f, out);
+    rtdSetImage(denoiser_, "depth", nanDepth.data(), RTD_FORMAT_FLOAT, 64, 48, 0, 0);
+    ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
+    std::string warning = rtdGetFrameWarning(denoiser_);
+    EXPECT_NE(warning.find("NaN or Inf depth or position"), std::string::npos) << warning;
+    std::vector<std::int32_t> background(f.objectId.size(), -1);
+    bind(f, out);
+    rtdSetImage(denoiser_, "ids", background.data(), RTD_FORMAT_INT, 64, 48, 0, 0);
+    ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
+    warning = rtdGetFrameWarning(denoiser_);
+    EXPECT_NE(warning.find("100 % of the pixels are background"), std::string::npos) << warning;
+    // Passed through: the input, demodulated and modulated back.
+    for (std::size_t i = 0; i < out.size(); i += 97)
+        EXPECT_NEAR(out[i], f.beauty.pixels[i], 1e-5f * std::max(1.0f, f.beauty.pixels[i]));
+    EXPECT_EQ(rtdGetFrameWarning(nullptr), nullptr);
+    takeError();
 }
 
 }  // namespace

@@ -32,7 +32,18 @@ struct FrameStats {
     long long radianceClamped = 0;      // beauty values beyond +-kMaxRadiance clamped to it
     long long missingNormals = 0;       // object pixels with a zero or non-finite normal: their
                                         // normal terms neutral (filtered by colour and position)
+    long long nonFiniteGeometry = 0;    // object pixels whose position or depth is NaN/Inf: read
+                                        // as background
+    long long backgroundPixels = 0;     // pixels passed through unfiltered: ID -1, an ID out of
+                                        // range, or nonFiniteGeometry
+    long long pixels = 0;               // the frame's
 };
+
+// What looked broken in the frame these statistics are of, though it was denoised (empty where
+// nothing did): most of the frame without usable geometry (a depth or position pass of NaN/Inf,
+// every object ID -1, normals all zero), which leaves it as noisy as it came. A frame of sky alone
+// reads so too: such a frame has nothing to denoise either.
+std::string inputWarning(const FrameStats& stats);
 
 // Debug images (Denoiser::debugImage).
 enum class DebugView {
@@ -96,6 +107,13 @@ class Denoiser {
 
     // Forgets the history (e.g. at a camera cut).
     void reset();
+    // Takes new settings (validated first: rtd::Error(InvalidArgument) leaves them as they were).
+    // The history is kept, and the values take effect at the next frame, where the method's
+    // passes and images stay the same (sigmas, alphas, tolerances, clamp widths); a change of
+    // method, iteration count, radius, firefly removal on/off or albedo demodulation starts a
+    // new history. settings.device is not read (the denoiser stays where it is). Returns whether
+    // the history was kept.
+    bool changeSettings(const DenoiserSettings& settings);
 
     const DenoiserSettings& settings() const;
     const std::vector<PassInfo>& passes() const;

@@ -14,6 +14,7 @@ enum class ErrorCode {
     IoFailure,        // reading or writing failed (truncated file, unwritable folder)
     MissingTool,      // an external program (ffmpeg) is not installed
     DeviceFailure,    // the compute device failed or is absent
+    OutOfMemory,      // an allocation on the device (host memory for the CPU) failed
 };
 
 class Error : public std::runtime_error {

@@ -113,8 +113,11 @@ RTD_API void rtdReleaseDenoiser(RTDDenoiser denoiser);
 /* Settings by the command line's long option names, without "--" ("sigma-color",
  * "svgf-iterations", "outlier"; rtdenoise denoise --help lists them with their ranges), plus
  * "motion-scale-x", "motion-scale-y" (--motion-scale X,Y) and "depth-kind" ("view-z",
- * "ray-distance"). A value out of range is refused here, naming it. Changing a setting after the
- * first rtdExecute starts a new history (as rtdReset). rtdSetInt also sets a float setting. */
+ * "ray-distance"). A value out of range is refused here, naming it. After the first rtdExecute a
+ * setting takes effect at the next frame; the history is kept (setting a value again, or a new
+ * sigma, alpha or tolerance, is cheap) unless the change alters the method's passes: the method,
+ * an iteration count, a radius, "outlier" or "albedo" start a new history. rtdSetInt also sets a
+ * float setting. */
 RTD_API RTDError rtdSetFloat(RTDDenoiser denoiser, const char* name, float value);
 RTD_API RTDError rtdSetInt(RTDDenoiser denoiser, const char* name, int value);
 RTD_API RTDError rtdSetBool(RTDDenoiser denoiser, const char* name, bool value);
@@ -165,6 +168,12 @@ RTD_API RTDError rtdSetObjectCount(RTDDenoiser denoiser, int objectCount);
 RTD_API RTDError rtdExecute(RTDDenoiser denoiser);
 /* Forgets the history (a camera cut). */
 RTD_API RTDError rtdReset(RTDDenoiser denoiser);
+/* What looked broken in the last frame's input though rtdExecute succeeded, "" where nothing
+ * did: most of the frame without usable geometry (a "depth" or "position" of NaN/Inf, every ID
+ * -1, zero normals), which passes it through as noisy as it came. Valid until the next call on
+ * the denoiser; NULL (and an error) for a NULL denoiser. On an rtdNewCUDADevice device with
+ * device-memory images, known after rtdSynchronize. */
+RTD_API const char* rtdGetFrameWarning(RTDDenoiser denoiser);
 
 #ifdef __cplusplus
 }

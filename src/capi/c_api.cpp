@@ -14,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/checked_size.h"
 #include "devices/device.h"
 #include "rtdenoise/rtdenoise.h"
 #include "rtdenoise/rtdenoise.hpp"
@@ -33,6 +34,8 @@ RTDError toCode(rtd::ErrorCode code) {
             return RTD_ERROR_INVALID_INPUT;
         case rtd::ErrorCode::DeviceFailure:
             return RTD_ERROR_DEVICE_FAILURE;
+        case rtd::ErrorCode::OutOfMemory:
+            return RTD_ERROR_OUT_OF_MEMORY;
         default:
             return RTD_ERROR_UNKNOWN;
     }
@@ -326,6 +329,9 @@ struct RTDDenoiserImpl {
     rtd::Matrix4 worldToScreen = rtd::Matrix4::identity();
     bool hasMatrices = false;
     int objectCount = 0;
+    // Set while a call uses the denoiser: a second thread's call is refused, not run into it.
+    std::atomic<bool> inUse{false};
+    std::string frameWarning;  // rtdGetFrameWarning's, valid until the next call
 };
 
 namespace rtd::capi {
@@ -338,15 +344,35 @@ void requireDenoiser(RTDDenoiser denoiser) {
     if (!denoiser) fail(RTD_ERROR_INVALID_ARGUMENT, "the denoiser is NULL");
 }
 
-// Applies a change to a copy of the settings, keeps it if it validates; a denoiser already made
-// is remade at the next execute (a new history).
+// A call's hold on its denoiser: one thread at a time (as documented); a call from a second
+// thread meanwhile fails with INVALID_OPERATION and leaves the first one's work untouched.
+class ExclusiveUse {
+  public:
+    explicit ExclusiveUse(RTDDenoiser denoiser) : denoiser_(denoiser) {
+        requireDenoiser(denoiser);
+        if (denoiser->inUse.exchange(true, std::memory_order_acquire))
+            fail(RTD_ERROR_INVALID_OPERATION,
+                 "the denoiser is in use by another thread (a denoiser takes one call at a "
+                 "time: use one per thread, or serialise the calls)");
+    }
+    ~ExclusiveUse() { denoiser_->inUse.store(false, std::memory_order_release); }
+    ExclusiveUse(const ExclusiveUse&) = delete;
+    ExclusiveUse& operator=(const ExclusiveUse&) = delete;
+
+  private:
+    RTDDenoiser denoiser_;
+};
+
+// Applies a change to a copy of the settings, keeps it if it validates. A denoiser already made
+// takes it at its next frame, keeping its history unless the method's passes change (an engine
+// that sets every parameter before every frame must still get temporal filtering).
 template <class Change>
 void changeSettings(RTDDenoiser d, Change&& change) {
     DenoiserSettings next = d->settings;
     change(next);
     rtd::validate(next);
+    if (d->denoiser) d->denoiser->changeSettings(next);
     d->settings = next;
-    d->denoiser.reset();
 }
 
 rtd::ImageView viewOf(const BoundImage& b) {
@@ -417,10 +443,10 @@ void execute(RTDDenoiser d) {
     view.roughness = viewOf(d->images[kRoughness]);
     view.hitDistance = viewOf(d->images[kHitDistance]);
     view.objectCount = d->objectCount;
-    // The single-frame methods never reproject: without matrices, identities stand for them.
-    if (!d->hasMatrices && !motion)
-        d->objectToWorld.assign(std::size_t(d->objectCount), rtd::Matrix4::identity());
-    view.objectToWorld = d->objectToWorld.empty() ? nullptr : d->objectToWorld.data();
+    // Without matrices (motion vectors, or a single-frame method) objectCount alone bounds the
+    // IDs: no per-object matrix is built, whatever the count.
+    view.objectToWorld = d->hasMatrices && !d->objectToWorld.empty() ? d->objectToWorld.data()
+                                                                     : nullptr;
     if (!motion && d->hasMatrices) view.objectCount = int(d->objectToWorld.size());
     view.worldToCamera = d->worldToCamera;
     view.worldToScreen = d->worldToScreen;
@@ -593,7 +619,7 @@ void rtdReleaseDenoiser(RTDDenoiser denoiser) {
 
 RTDError rtdSetFloat(RTDDenoiser d, const char* name, float value) {
     return guarded(deviceOf(d), "rtdSetFloat", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         const SettingEntry& e = findSetting(name);
         requireKind(e, ValueKind::Float);
         if (!std::isfinite(value))
@@ -604,7 +630,7 @@ RTDError rtdSetFloat(RTDDenoiser d, const char* name, float value) {
 
 RTDError rtdSetInt(RTDDenoiser d, const char* name, int value) {
     return guarded(deviceOf(d), "rtdSetInt", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         const SettingEntry& e = findSetting(name);
         if (e.kind == ValueKind::Float) {  // an int is a float value too
             changeSettings(
@@ -618,7 +644,7 @@ RTDError rtdSetInt(RTDDenoiser d, const char* name, int value) {
 
 RTDError rtdSetBool(RTDDenoiser d, const char* name, bool value) {
     return guarded(deviceOf(d), "rtdSetBool", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         const SettingEntry& e = findSetting(name);
         requireKind(e, ValueKind::Bool);
         changeSettings(d, [&](DenoiserSettings& s) { *static_cast<bool*>(e.field(s)) = value; });
@@ -627,7 +653,7 @@ RTDError rtdSetBool(RTDDenoiser d, const char* name, bool value) {
 
 RTDError rtdSetString(RTDDenoiser d, const char* name, const char* value) {
     return guarded(deviceOf(d), "rtdSetString", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         if (name && name == kDepthKind) {
             if (value && std::strcmp(value, "view-z") == 0)
                 d->depthKind = rtd::DepthKind::ViewZ;
@@ -655,7 +681,7 @@ RTDError rtdSetString(RTDDenoiser d, const char* name, const char* value) {
 float rtdGetFloat(RTDDenoiser d, const char* name) {
     float value = 0.0f;
     guarded(deviceOf(d), "rtdGetFloat", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         const SettingEntry& e = findSetting(name);
         if (e.kind == ValueKind::Int) {
             value = float(*static_cast<int*>(e.field(d->settings)));
@@ -670,7 +696,7 @@ float rtdGetFloat(RTDDenoiser d, const char* name) {
 int rtdGetInt(RTDDenoiser d, const char* name) {
     int value = 0;
     guarded(deviceOf(d), "rtdGetInt", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         const SettingEntry& e = findSetting(name);
         requireKind(e, ValueKind::Int);
         value = *static_cast<int*>(e.field(d->settings));
@@ -681,7 +707,7 @@ int rtdGetInt(RTDDenoiser d, const char* name) {
 bool rtdGetBool(RTDDenoiser d, const char* name) {
     bool value = false;
     guarded(deviceOf(d), "rtdGetBool", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         const SettingEntry& e = findSetting(name);
         requireKind(e, ValueKind::Bool);
         value = *static_cast<bool*>(e.field(d->settings));
@@ -692,7 +718,7 @@ bool rtdGetBool(RTDDenoiser d, const char* name) {
 const char* rtdGetString(RTDDenoiser d, const char* name) {
     const char* value = nullptr;
     guarded(deviceOf(d), "rtdGetString", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         if (name && name == kDepthKind) {
             value = d->depthKind == rtd::DepthKind::ViewZ ? "view-z" : "ray-distance";
             return;
@@ -715,7 +741,7 @@ RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat
             fail(RTD_ERROR_INVALID_ARGUMENT, fmt::format("{}: format {} is not an RTDFormat",
                                                          name ? name : "NULL", formatValue));
         const RTDFormat format = ptr ? RTDFormat(formatValue) : RTD_FORMAT_UNDEFINED;
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         if (!name) fail(RTD_ERROR_INVALID_ARGUMENT, "the image name is NULL");
         int slot = 0;
         while (slot < kSlots && std::strcmp(kImageNames[slot], name) != 0) ++slot;
@@ -735,6 +761,17 @@ RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat
                  fmt::format("{}: size {}x{} is empty or too large", name, width, height));
         const std::size_t pixelBytes = std::size_t(channelsOf(format)) * valueBytes(format);
         const std::size_t pixel = pixelStride ? pixelStride : pixelBytes;
+        const std::optional<std::size_t> packedRow = rtd::checkedProduct(width, pixel);
+        const std::optional<std::size_t> span =
+            packedRow ? rtd::imageSpanBytes(width, height, pixel, rowStride ? rowStride : *packedRow,
+                                            pixelBytes)
+                      : std::nullopt;
+        if (!span || !rtd::fitsAddressSpace(ptr, *span))
+            fail(RTD_ERROR_INVALID_ARGUMENT,
+                 fmt::format("{}: strides of {} bytes per pixel and {} per row over {}x{} pixels "
+                             "reach past the end of memory",
+                             name, pixelStride, rowStride, width, height));
+        // Within the span just checked: no product below overflows.
         if (pixel < pixelBytes || (rowStride != 0 && rowStride < (width - 1) * pixel + pixelBytes))
             fail(RTD_ERROR_INVALID_ARGUMENT,
                  fmt::format("{}: strides of {} bytes per pixel and {} per row are too small for "
@@ -747,7 +784,7 @@ RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat
 RTDError rtdSetMatrices(RTDDenoiser d, const float* objectToWorld, int objectCount,
                         const float* worldToCamera, const float* worldToScreen) {
     return guarded(deviceOf(d), "rtdSetMatrices", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         if (objectCount < 0 || (objectCount > 0 && !objectToWorld))
             fail(RTD_ERROR_INVALID_ARGUMENT,
                  fmt::format("objectToWorld is NULL or objectCount {} is negative", objectCount));
@@ -772,7 +809,7 @@ RTDError rtdSetMatrices(RTDDenoiser d, const float* objectToWorld, int objectCou
 
 RTDError rtdSetObjectCount(RTDDenoiser d, int objectCount) {
     return guarded(deviceOf(d), "rtdSetObjectCount", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         if (objectCount < 0)
             fail(RTD_ERROR_INVALID_ARGUMENT,
                  fmt::format("objectCount {} is negative", objectCount));
@@ -782,14 +819,24 @@ RTDError rtdSetObjectCount(RTDDenoiser d, int objectCount) {
 
 RTDError rtdExecute(RTDDenoiser d) {
     return guarded(deviceOf(d), "rtdExecute", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         execute(d);
     });
 }
 
+const char* rtdGetFrameWarning(RTDDenoiser d) {
+    const char* warning = nullptr;
+    guarded(deviceOf(d), "rtdGetFrameWarning", [&] {
+        const ExclusiveUse use(d);
+        d->frameWarning = d->denoiser ? rtd::inputWarning(d->denoiser->lastFrameStats()) : "";
+        warning = d->frameWarning.c_str();
+    });
+    return warning;
+}
+
 RTDError rtdReset(RTDDenoiser d) {
     return guarded(deviceOf(d), "rtdReset", [&] {
-        requireDenoiser(d);
+        const ExclusiveUse use(d);
         if (d->denoiser) d->denoiser->reset();
     });
 }

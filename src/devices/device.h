@@ -46,12 +46,15 @@ class Device {
     virtual void synchronize() = 0;
     // The ingest's per-pixel input flags (IngestKernel::inputFlags) summed: values replaced
     // (bits 0-1), pixels with a bad object ID (bit 2), values clamped (bits 3-4), object pixels
-    // without a normal (bit 5).
+    // without a normal (bit 5), object pixels with a NaN/Inf position or depth (bit 6),
+    // background pixels (bit 7).
     struct InputFlagCounts {
         long long nonFinite = 0;
         long long badObjectIds = 0;
         long long clamped = 0;
         long long missingNormals = 0;
+        long long nonFiniteGeometry = 0;
+        long long background = 0;
     };
     virtual InputFlagCounts countInputFlags(const std::uint8_t* deviceFlags, std::size_t n) = 0;
     // The same without a wait: the counts add up on the device until takeQueuedInputFlags()
@@ -101,6 +104,8 @@ class Device {
         a.badObjectIds += b.badObjectIds;
         a.clamped += b.clamped;
         a.missingNormals += b.missingNormals;
+        a.nonFiniteGeometry += b.nonFiniteGeometry;
+        a.background += b.background;
         return a;
     }
     std::size_t allocatedBytes_ = 0;

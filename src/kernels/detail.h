@@ -344,7 +344,7 @@ struct DetailStabiliseKernel {
         if (objectCount <= 0) return 0.0f;  // no matrices: no history either (nothing held)
         const std::int32_t id = g.objectId[i];
         const bool covered = id >= 0 && id < objectCount;
-        const PreviousPixel before = previousPixel(g, i, previous, objects[covered ? id : 0]);
+        const PreviousPixel before = previousPixel(g, i, previous, objectEntry(objects, id, covered, previous));
         const float d = std::sqrt(square(before.x - float(x)) + square(before.y - float(y)));
         return d < 3.0e38f ? d : 3.0e38f;  // NaN: far
     }
@@ -505,7 +505,7 @@ struct DetailSpecularReproject {
     RTD_HOST_DEVICE RTD_INLINE float surfaceLength(int x, int y, PixelIndex i, float length) const {
         const std::int32_t id = g.objectId[i];
         const bool covered = id >= 0 && id < objectCount;
-        const ObjectReprojection& object = objects[covered ? id : 0];
+        const ObjectReprojection& object = objectEntry(objects, id, covered, previous);
         return surfaceLength(x, y, i, object, covered && object.valid, length);
     }
 
@@ -520,7 +520,7 @@ struct DetailSpecularReproject {
         const std::int32_t id = KnownId ? knownId : g.objectId[i];
         // An ID the matrices do not cover reads object 0, then keeps its history.
         const bool covered = id >= 0 && id < objectCount;
-        const ObjectReprojection& object = objects[covered ? id : 0];
+        const ObjectReprojection& object = objectEntry(objects, id, covered, previous);
         const bool live = covered && object.valid;
         const Float3 position = g.position.load(i);
         // A convex mirror of curvature k focuses at f = 1 / (2k): the image of a point at

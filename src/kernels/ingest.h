@@ -35,7 +35,8 @@ struct Ingest {
     float* depth;
     std::int32_t* objectId;
     // Per pixel (unpadded): bits 0-1 the radiance values replaced by 0, kBadObjectIdFlag, bits
-    // 3-4 the radiance values clamped to +-kMaxRadiance, kMissingNormalFlag (an object pixel).
+    // 3-4 the radiance values clamped to +-kMaxRadiance, kMissingNormalFlag (an object pixel),
+    // kNonFiniteGeometryFlag (an object pixel made background), kBackgroundFlag (passed through).
     std::uint8_t* inputFlags;
     NormalDepth4 normalDepth = {};      // InterleavedGuide only
     std::int32_t* filterKey = nullptr;  // GBufferView::filterKey
@@ -43,6 +44,8 @@ struct Ingest {
     static constexpr int kBadObjectIdFlag = 4;
     static constexpr int kClampedShift = 3;
     static constexpr int kMissingNormalFlag = 32;
+    static constexpr int kNonFiniteGeometryFlag = 64;
+    static constexpr int kBackgroundFlag = 128;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex s = PixelIndex(y) * layout.width + x;
@@ -98,9 +101,11 @@ struct Ingest {
         objectId[i] = kept;
         filterKey[i] =
             kept < 0 ? -1 : (separateObjects ? kept : 0) + (hasNormal ? 0 : kWithoutNormalKey);
-        inputFlags[s] =
-            std::uint8_t(bad + (idValid ? 0 : kBadObjectIdFlag) + (clamped << kClampedShift) +
-                         (kept >= 0 && !hasNormal ? kMissingNormalFlag : 0));
+        inputFlags[s] = std::uint8_t(
+            bad + (idValid ? 0 : kBadObjectIdFlag) + (clamped << kClampedShift) +
+            (kept >= 0 && !hasNormal ? kMissingNormalFlag : 0) +
+            (idValid && id >= 0 && !geometryFinite ? kNonFiniteGeometryFlag : 0) +
+            (kept < 0 ? kBackgroundFlag : 0));
     }
 };
 using IngestKernel = Ingest<false>;

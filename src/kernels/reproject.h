@@ -40,6 +40,15 @@ struct PreviousGeometry {
     int fromMotion = 0;
 };
 
+// Object `id`'s reprojection entry (entry 0 where `covered` is false: the caller then does not
+// trust it). With motion vectors every object's entry is the same identity, held once, so that
+// the table does not grow with the object count.
+RTD_HOST_DEVICE RTD_INLINE const ObjectReprojection& objectEntry(const ObjectReprojection* objects,
+                                                                 std::int32_t id, bool covered,
+                                                                 const PreviousGeometry& previous) {
+    return objects[covered && previous.fromMotion == 0 ? id : 0];
+}
+
 // Where pixel i was in the previous frame: continuous coordinates in which pixel centres are
 // integers, and its expected view depth there. Motion vectors give both (the object's matrix is
 // the identity then, and its transform unused); else the object's matrix. Both ways are computed
@@ -123,7 +132,7 @@ RTD_HOST_DEVICE RTD_INLINE HistoryTaps<Search3x3 ? 9 : 4> findHistory(
     std::int32_t id = KnownId ? knownId : g.objectId[i];
     // An ID the matrices do not cover (unchecked device input) reads object 0, then fails.
     bool covered = id >= 0 && id < objectCount;
-    const ObjectReprojection& object = objects[covered ? id : 0];
+    const ObjectReprojection& object = objectEntry(objects, id, covered, previous);
     bool trackable = covered && hasHistory && object.valid;
 
     const PreviousPixel before = previousPixel(g, i, previous, object);

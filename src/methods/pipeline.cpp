@@ -119,12 +119,15 @@ void Pipeline::allocate(Device& device, int width, int height) {
     L.width = width;
     L.height = height;
     L.padding = border;
-    L.pitch = (width + 2 * border + kAlign - 1) / kAlign * kAlign;
-    L.origin = border * L.pitch + border;
-    long long planeSize = (long long)L.pitch * (height + 2 * border);
+    // In 64 bits: a width near INT_MAX must be refused here, not overflow into a small pitch.
+    const long long pitch = (static_cast<long long>(width) + 2 * border + kAlign - 1) / kAlign * kAlign;
+    const long long planeSize = pitch * (static_cast<long long>(height) + 2 * border);
+    // Pixel indices are 32-bit (the widest image has 7 planes).
     if (7 * planeSize > 0x7fffffffLL)
-        throw Error(ErrorCode::InvalidInput,
+        throw Error(ErrorCode::InvalidArgument,
                     fmt::format("frame: {}x{} is too large for one device image", width, height));
+    L.pitch = int(pitch);
+    L.origin = border * L.pitch + border;
     L.planeSize = int(planeSize);
     memory_.clear();  // the old images first: no moment with both held
     layout_ = L;
@@ -140,6 +143,30 @@ void Pipeline::allocate(Device& device, int width, int height) {
     }
     current_ = 0;
     device.prepare(layout_, steps_);
+}
+
+bool Pipeline::adoptImages(Pipeline& from) {
+    auto sameImage = [](const ResourceDecl& a, const ResourceDecl& b) {
+        return a.name == b.name && a.element == b.element && a.planes == b.planes &&
+               a.lifetime == b.lifetime && a.fillByte == b.fillByte && a.padded == b.padded;
+    };
+    auto samePass = [](const PassInfo& a, const PassInfo& b) {
+        return a.name == b.name && a.inputs == b.inputs && a.outputs == b.outputs;
+    };
+    const bool same =
+        reach_ == from.reach_ && steps_ == from.steps_ &&
+        std::equal(resources_.begin(), resources_.end(), from.resources_.begin(),
+                   from.resources_.end(), sameImage) &&
+        std::equal(passInfos_.begin(), passInfos_.end(), from.passInfos_.begin(),
+                   from.passInfos_.end(), samePass);
+    if (!same) return false;
+    // The device prepared its forms of these same steps for this layout already.
+    memory_ = std::move(from.memory_);
+    layout_ = from.layout_;
+    current_ = from.current_;
+    from.memory_.clear();
+    from.layout_ = Layout{};
+    return true;
 }
 
 void* Pipeline::at(ResourceId r) const {

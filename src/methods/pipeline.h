@@ -140,6 +140,10 @@ class Pipeline {
     void run(Device& device, const FrameBinding& frame);
     // After a frame: this frame's history copies become the last frame's.
     void endFrame() { current_ = 1 - current_; }
+    // Takes `from`'s images (and so its history) where both declare the same passes over the same
+    // resources, as after a change of settings the passes merely read (a sigma); false, and
+    // nothing taken, where they differ.
+    bool adoptImages(Pipeline& from);
 
     // The debug view of the frame just processed (black where no resource has it).
     Image debugImage(Device& device, DebugView view) const;

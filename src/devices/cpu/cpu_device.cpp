@@ -150,7 +150,9 @@ class CpuDevice final : public Device {
         // 64-byte alignment: whole cache lines, aligned vector loads.
         std::size_t rounded = (bytes + 63) / 64 * 64;
         void* p = std::aligned_alloc(64, rounded == 0 ? 64 : rounded);
-        if (!p) throw Error(ErrorCode::DeviceFailure, "cpu: out of memory");
+        if (!p)
+            throw Error(ErrorCode::OutOfMemory,
+                        "cpu: out of memory (" + std::to_string(rounded) + " bytes)");
         return p;
     }
     void release(void* pointer) noexcept override { std::free(pointer); }
@@ -171,14 +173,18 @@ class CpuDevice final : public Device {
     }
     InputFlagCounts countInputFlags(const std::uint8_t* flags, std::size_t n) override {
         long long nonFinite = 0, badIds = 0, clamped = 0, missingNormals = 0;
-#pragma omp parallel for reduction(+ : nonFinite, badIds, clamped, missingNormals) schedule(static)
+        long long nonFiniteGeometry = 0, background = 0;
+#pragma omp parallel for reduction(+ : nonFinite, badIds, clamped, missingNormals, \
+                                       nonFiniteGeometry, background) schedule(static)
         for (std::size_t i = 0; i < n; ++i) {
             nonFinite += flags[i] & 3;
             badIds += (flags[i] >> 2) & 1;
             clamped += (flags[i] >> 3) & 3;
-            missingNormals += flags[i] >> 5;
+            missingNormals += (flags[i] >> 5) & 1;
+            nonFiniteGeometry += (flags[i] >> 6) & 1;
+            background += flags[i] >> 7;
         }
-        return {nonFinite, badIds, clamped, missingNormals};
+        return {nonFinite, badIds, clamped, missingNormals, nonFiniteGeometry, background};
     }
 
   private:

@@ -14,8 +14,9 @@ namespace {
 
 void check(cudaError_t status, const char* what) {
     if (status != cudaSuccess)
-        throw Error(ErrorCode::DeviceFailure,
-                    std::string("cuda: ") + what + ": " + cudaGetErrorString(status));
+        throw Error(
+            status == cudaErrorMemoryAllocation ? ErrorCode::OutOfMemory : ErrorCode::DeviceFailure,
+            std::string("cuda: ") + what + ": " + cudaGetErrorString(status));
 }
 
 // Blocks of 128 threads. Each kernel's register budget is set by __launch_bounds__'s minimum of
@@ -143,23 +144,29 @@ dim3 blockShape(const Kernel& kernel) {
     return dim3(x, kThreadsPerBlock / x);
 }
 
-// totals[0]: values replaced (flag bits 0-1); totals[1]: pixels with a bad ID (bit 2).
-constexpr int kInputFlagCounters = 4;  // Device::InputFlagCounts' fields
+// Device::InputFlagCounts' fields, in order, from the flag bits (Device::InputFlagCounts).
+constexpr int kInputFlagCounters = 6;
 
 __global__ void countInputFlagsKernel(const std::uint8_t* flags, std::size_t n,
                                       unsigned long long* totals) {
-    unsigned long long nonFinite = 0, badIds = 0, clamped = 0, missingNormals = 0;
+    unsigned long long counts[kInputFlagCounters] = {};
     for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < n;
          i += std::size_t(gridDim.x) * blockDim.x) {
-        nonFinite += flags[i] & 3;
-        badIds += (flags[i] >> 2) & 1;
-        clamped += (flags[i] >> 3) & 3;
-        missingNormals += flags[i] >> 5;
+        counts[0] += flags[i] & 3;
+        counts[1] += (flags[i] >> 2) & 1;
+        counts[2] += (flags[i] >> 3) & 3;
+        counts[3] += (flags[i] >> 5) & 1;
+        counts[4] += (flags[i] >> 6) & 1;
+        counts[5] += flags[i] >> 7;
     }
-    if (nonFinite) atomicAdd(&totals[0], nonFinite);
-    if (badIds) atomicAdd(&totals[1], badIds);
-    if (clamped) atomicAdd(&totals[2], clamped);
-    if (missingNormals) atomicAdd(&totals[3], missingNormals);
+    for (int k = 0; k < kInputFlagCounters; ++k)
+        if (counts[k]) atomicAdd(&totals[k], counts[k]);
+}
+
+Device::InputFlagCounts countsOf(const unsigned long long (&totals)[kInputFlagCounters]) {
+    return {static_cast<long long>(totals[0]), static_cast<long long>(totals[1]),
+            static_cast<long long>(totals[2]), static_cast<long long>(totals[3]),
+            static_cast<long long>(totals[4]), static_cast<long long>(totals[5])};
 }
 
 // What every Device made for one ComputeDevice shares: the stream (the caller's, or one made
@@ -417,8 +424,7 @@ class CudaDevice final : public Device {
         check(cudaGetLastError(), "countInputFlags");
         unsigned long long totals[kInputFlagCounters] = {};
         copyToHost(totals, counters_, sizeof totals);
-        return {static_cast<long long>(totals[0]), static_cast<long long>(totals[1]),
-                static_cast<long long>(totals[2]), static_cast<long long>(totals[3])};
+        return countsOf(totals);
     }
 
     // Queued frames' flags add up in the second half of counters_ until takeQueuedInputFlags().
@@ -430,8 +436,7 @@ class CudaDevice final : public Device {
         unsigned long long totals[kInputFlagCounters] = {};
         copyToHost(totals, counters_ + kInputFlagCounters, sizeof totals);
         check(cudaMemsetAsync(counters_ + kInputFlagCounters, 0, sizeof totals, stream_), "memset");
-        return {static_cast<long long>(totals[0]), static_cast<long long>(totals[1]),
-                static_cast<long long>(totals[2]), static_cast<long long>(totals[3])};
+        return countsOf(totals);
     }
 
   private:
