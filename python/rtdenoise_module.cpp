@@ -22,6 +22,7 @@
 
 #include "metrics/metrics.h"
 #include "rtdenoise/error.h"
+#include "rtdenoise/image.h"
 #include "rtdenoise/io.h"
 #include "rtdenoise/rtdenoise.h"
 
@@ -55,6 +56,8 @@ int pythonCodeOf(rtd::ErrorCode code) {
             return RTD_ERROR_INVALID_INPUT;
         case rtd::ErrorCode::DeviceFailure:
             return RTD_ERROR_DEVICE_FAILURE;
+        case rtd::ErrorCode::OutOfMemory:
+            return RTD_ERROR_OUT_OF_MEMORY;
         case rtd::ErrorCode::MissingFile:
             return kMissingFile;
         case rtd::ErrorCode::IoFailure:
@@ -191,6 +194,13 @@ class CApiDenoiser {
     }
 
     void reset() { check(rtdReset(denoiser_)); }
+
+    // What looked broken in the last frame's input ("" where nothing did).
+    std::string frameWarning() {
+        const char* warning = rtdGetFrameWarning(denoiser_);
+        if (!warning) raiseLastError(device_, RTD_ERROR_UNKNOWN, "rtdGetFrameWarning failed");
+        return warning;
+    }
 
     std::string deviceName() const {
         const char* name = rtdGetDeviceName(device_);
@@ -451,6 +461,9 @@ PYBIND11_MODULE(_rtdenoise, module) {
     module.attr("FORMAT_FLOAT") = int(RTD_FORMAT_FLOAT);
     module.attr("FORMAT_HALF") = int(RTD_FORMAT_HALF);
     module.attr("FORMAT_INT") = int(RTD_FORMAT_INT);
+    // The clamp the library applies to radiance: the Python layer clamps float64 input to it
+    // before the cast to float32 (which would make 1e300 Inf, and so 0).
+    module.attr("MAX_RADIANCE") = rtd::kMaxRadiance;
 
     py::class_<CApiDenoiser>(module, "Denoiser")
         .def(py::init<const std::optional<std::string>&, int>(), py::arg("method"),
@@ -466,6 +479,7 @@ PYBIND11_MODULE(_rtdenoise, module) {
         .def("set_object_count", &CApiDenoiser::setObjectCount)
         .def("execute", &CApiDenoiser::execute)
         .def("reset", &CApiDenoiser::reset)
+        .def("frame_warning", &CApiDenoiser::frameWarning)
         .def_property_readonly("device_name", &CApiDenoiser::deviceName);
 
     py::class_<FrameSourceHandle>(module, "FrameSource")

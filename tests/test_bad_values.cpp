@@ -228,6 +228,59 @@ TEST(BadValues, ZeroOrNonFiniteNormalsDoNotDarkenAndAreCounted) {
     }
 }
 
+// A broken depth or position pass, or an ID pass of -1 everywhere, leaves the frame as noisy as it
+// came: each is counted (FrameStats) and named by inputWarning; a normal frame warns of nothing.
+TEST(BadValues, FramesWithoutUsableGeometryAreCountedAndWarnedOf) {
+    for (Method method : kEveryMethod) {
+        Denoiser denoiser(settingsFor(method));
+        Frame f = makeFrame(texturedScene());
+        const long long pixels = 32 * 24, background = 32 * 2;
+        denoiser.processFrame(f);
+        FrameStats s = denoiser.lastFrameStats();
+        EXPECT_EQ(s.pixels, pixels);
+        EXPECT_EQ(s.backgroundPixels, background) << toString(method);
+        EXPECT_EQ(s.nonFiniteGeometry, 0);
+        EXPECT_EQ(inputWarning(s), "");
+
+        Frame depthNan = f;
+        for (float& z : depthNan.depth.pixels) z = std::nanf("");
+        Image out = denoiser.processFrame(depthNan);
+        s = denoiser.lastFrameStats();
+        EXPECT_EQ(s.nonFiniteGeometry, pixels - background) << toString(method);
+        EXPECT_EQ(s.backgroundPixels, pixels);
+        EXPECT_NE(inputWarning(s).find("92 % of the pixels have a NaN or Inf depth or position"),
+                  std::string::npos)
+            << inputWarning(s);
+        EXPECT_LT(maxRelative(out, depthNan.beauty), 1e-5) << toString(method);  // passed through
+
+        Frame positionInf = f;
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 20; ++x) positionInf.position.at(x, y, 1) = INFINITY;
+        denoiser.processFrame(positionInf);
+        s = denoiser.lastFrameStats();
+        EXPECT_EQ(s.nonFiniteGeometry, 20 * 22) << toString(method);
+        EXPECT_NE(inputWarning(s).find("57 % of the pixels have a NaN or Inf"), std::string::npos)
+            << inputWarning(s);
+
+        Frame noIds = f;
+        for (std::int32_t& id : noIds.objectId) id = -1;
+        denoiser.processFrame(noIds);
+        s = denoiser.lastFrameStats();
+        EXPECT_EQ(s.backgroundPixels, pixels);
+        EXPECT_NE(inputWarning(s).find("100 % of the pixels are background"), std::string::npos)
+            << inputWarning(s);
+
+        Frame noNormals = f;
+        for (float& n : noNormals.normal.pixels) n = 0.0f;
+        denoiser.processFrame(noNormals);
+        s = denoiser.lastFrameStats();
+        EXPECT_EQ(s.missingNormals, pixels - background);
+        EXPECT_NE(inputWarning(s).find("92 % of the pixels have a zero or non-finite normal"),
+                  std::string::npos)
+            << inputWarning(s);
+    }
+}
+
 // A sigma so small that 1 / (2 sigma^2) overflows used to pass validation and blacken the image
 // (0 * inf in the centre tap): it is refused, and the smallest accepted one keeps the image.
 TEST(BadValues, TinySigmasAreRefusedOrKeepTheImage) {

@@ -109,6 +109,35 @@ std::function<void(int, std::map<std::string, Image>&)> withoutPass(const std::s
     };
 }
 
+// An edit that drops the channels of `pass` with the given components ("Z") from the frames of
+// the given indices (all when empty).
+std::function<void(int, std::map<std::string, Image>&)> withoutChannels(
+    const std::string& pass, const std::string& components, std::set<int> frames = {}) {
+    return [pass, components, frames](int index, std::map<std::string, Image>& channels) {
+        if (!frames.empty() && !frames.count(index)) return;
+        std::erase_if(channels, [&](const auto& entry) {
+            return passOf(entry.first) == pass &&
+                   components.find(entry.first.back()) != std::string::npos;
+        });
+    };
+}
+
+// An edit that crops frame `frame`'s channels to their top-left width x height pixels.
+std::function<void(int, std::map<std::string, Image>&)> croppedTo(int frame, int width,
+                                                                  int height) {
+    return [frame, width, height](int index, std::map<std::string, Image>& channels) {
+        if (index != frame) return;
+        for (auto& [name, image] : channels) {
+            Image cropped(width, height, image.channels);
+            for (int y = 0; y < height; ++y)
+                for (int x = 0; x < width; ++x)
+                    for (int c = 0; c < image.channels; ++c)
+                        cropped.at(x, y, c) = image.at(x, y, c);
+            image = std::move(cropped);
+        }
+    };
+}
+
 // ---- the fixture's matrices (matrices.txt, written by the script) ----
 
 using Matrix4d = std::array<std::array<double, 4>, 4>;
@@ -657,6 +686,94 @@ TEST_F(BlenderBroken, AnOptionalPassMissingFromALaterFrameIsAnError) {
     EXPECT_TRUE(contains(message, "no Vector pass")) << message;
 }
 
+// Issue 37 item 3: an optional pass the first frame lacks and later frames have is judged as one
+// a later frame lacks (refused, naming the file and the pass), not dropped from every frame.
+TEST_F(BlenderBroken, AnOptionalPassMissingFromTheFirstFrameOnlyIsAnError) {
+    for (const std::string pass : {"IndexOB", "Denoising Albedo", "Vector"}) {
+        SCOPED_TRACE(pass);
+        const fs::path in = dir.path() / ("first-" + pass);
+        copyFixture(in, withoutPass(pass, {0}));
+        const BlenderSequence sequence(in);
+        std::string message = messageOf([&] { sequence.checkFrames(kFixtureFrames); });
+        EXPECT_TRUE(contains(message, (in / "0001.exr").string() + ": no " + pass + " pass"))
+            << message;
+        EXPECT_TRUE(contains(message, (in / "0002.exr").string())) << message;
+        message = messageOf([&] { sequence.readFrame(1); });
+        EXPECT_TRUE(contains(message, "no " + pass + " pass")) << message;
+
+        // The command fails before it writes anything.
+        const fs::path output = dir.path() / ("out-" + pass);
+        const test::CliResult r =
+            runCli("denoise " + quoted(in) + " --method jbf -o " + quoted(output));
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_TRUE(contains(r.output, "0001.exr: no " + pass + " pass")) << r.output;
+        EXPECT_FALSE(fs::exists(output));
+    }
+}
+
+// Issue 37 item 12: a pass with one channel missing names that channel, in the first frame or a
+// later one; a Vector pass without Y is a broken file, not a render with motion blur on.
+TEST_F(BlenderBroken, APartlyMissingPassNamesTheMissingChannel) {
+    const fs::path normal = dir.path() / "normal-z";
+    copyFixture(normal, withoutChannels("Normal", "Z"));
+    std::string message = messageOf([&] { BlenderSequence sequence(normal); });
+    EXPECT_TRUE(contains(message, (normal / "0001.exr").string())) << message;
+    EXPECT_TRUE(contains(message, "no channel 'ViewLayer.Normal.Z'")) << message;
+    EXPECT_FALSE(contains(message, "Normal.X")) << message;
+
+    const fs::path laterNormal = dir.path() / "later-normal-z";
+    copyFixture(laterNormal, withoutChannels("Normal", "Z", {2}));
+    message = messageOf([&] { BlenderSequence(laterNormal).checkFrames(kFixtureFrames); });
+    EXPECT_TRUE(contains(message, (laterNormal / "0003.exr").string())) << message;
+    EXPECT_TRUE(contains(message, "no channel 'ViewLayer.Normal.Z'")) << message;
+
+    const fs::path vector = dir.path() / "vector-y";
+    copyFixture(vector, withoutChannels("Vector", "Y"));
+    for (const std::string method : {"svgf", "jbf"}) {
+        const fs::path output = dir.path() / ("out-" + method);
+        const test::CliResult r =
+            runCli("denoise " + quoted(vector) + " --method " + method + " -o " + quoted(output));
+        EXPECT_NE(r.exitCode, 0) << method;
+        EXPECT_TRUE(contains(r.output, (vector / "0001.exr").string())) << r.output;
+        EXPECT_TRUE(contains(r.output, "no channel 'ViewLayer.Vector.Y'")) << r.output;
+        EXPECT_FALSE(contains(r.output, "use_motion_blur")) << r.output;
+        EXPECT_FALSE(fs::exists(output));
+    }
+
+    const fs::path laterVector = dir.path() / "later-vector-y";
+    copyFixture(laterVector, withoutChannels("Vector", "Y", {3}));
+    message = messageOf([&] { BlenderSequence(laterVector).checkFrames(kFixtureFrames); });
+    EXPECT_TRUE(contains(message, (laterVector / "0004.exr").string())) << message;
+    EXPECT_TRUE(contains(message, "no channel 'ViewLayer.Vector.Y'")) << message;
+}
+
+// Issue 37 item 14: a frame of another size restarts the history (by design); the command says so
+// at that frame, naming the file and both sizes, and its summary counts the frames of each size.
+TEST_F(BlenderBroken, AFrameOfAnotherSizeIsWarnedAboutAndSummarisedTruthfully) {
+    const fs::path in = dir.path() / "in";
+    copyFixture(in, croppedTo(2, 32, 24));
+    const test::CliResult r =
+        runCli("denoise " + quoted(in) + " --method svgf -o " + quoted(dir.path() / "out"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "warning: " + (in / "0003.exr").string() +
+                                       ": 32x24, but the frame before it is 64x48"))
+        << r.output;
+    EXPECT_TRUE(contains(r.output, "warning: " + (in / "0004.exr").string() +
+                                       ": 64x48, but the frame before it is 32x24"))
+        << r.output;
+    EXPECT_EQ(occurrences(r.output, "the history restarts"), 2) << r.output;
+    EXPECT_TRUE(contains(r.output, "4 frames (3 of 64x48, 1 of 32x24) in")) << r.output;
+    EXPECT_EQ(readExr(dir.path() / "out" / "result_2.exr", {{"R"}, {"G"}, {"B"}}).width, 32);
+    EXPECT_EQ(readExr(dir.path() / "out" / "result_3.exr", {{"R"}, {"G"}, {"B"}}).width, 64);
+
+    // One size: the summary as before.
+    const test::CliResult same = runCli("denoise " + quoted(kFixture / "noisy") +
+                                        " --method jbf -o " + quoted(dir.path() / "out-same"));
+    ASSERT_EQ(same.exitCode, 0) << same.output;
+    EXPECT_TRUE(contains(same.output, "4 frames of 64x48 in")) << same.output;
+    EXPECT_FALSE(contains(same.output, "history restarts")) << same.output;
+}
+
 TEST_F(BlenderBroken, AGapInTheNumberingNamesTheMissingFile) {
     copyFixture(dir.path() / "in", {}, 7);  // 0007..0010
     EXPECT_EQ(BlenderSequence(dir.path() / "in").files().first, 7);
@@ -775,6 +892,88 @@ TEST(BlenderNames, TheFirstUsableViewLayerIsReadUnlessOneIsNamed) {
                                      " --view-layer Nope -o " + quoted(dir.path() / "out"));
     EXPECT_NE(r.exitCode, 0);
     EXPECT_TRUE(contains(r.output, "no view layer 'Nope'")) << r.output;
+}
+
+// Issue 37 item 2: a folder whose files fit more than one numbering (0001..0004 and a stray 5.exr
+// or 12.exr) is refused naming both, as a folder of several names is; a pattern chooses one.
+TEST(BlenderNames, AFolderOfTwoNumberingsIsRefusedNamingBoth) {
+    test::TempFolder dir("blender-numberings");
+    for (const std::string stray : {"5.exr", "12.exr"}) {
+        SCOPED_TRACE(stray);
+        const fs::path in = dir.path() / stray;
+        copyFixture(in);
+        fs::copy_file(in / "0001.exr", in / stray);
+        const std::string message = messageOf([&] { openFrameSource(in); });
+        EXPECT_TRUE(contains(message, "several numberings")) << message;
+        EXPECT_TRUE(contains(message, "0001.exr")) << message;
+        EXPECT_TRUE(contains(message, "0004.exr")) << message;
+        EXPECT_TRUE(contains(message, stray)) << message;
+        EXPECT_TRUE(contains(message, (in / "####.exr").string())) << message;
+        EXPECT_EQ(openFrameSource(in / "####.exr")->frameCount(), kFixtureFrames);
+
+        const fs::path output = dir.path() / ("out-" + stray);
+        const test::CliResult r =
+            runCli("denoise " + quoted(in) + " --method jbf -o " + quoted(output));
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_TRUE(contains(r.output, "several numberings")) << r.output;
+        EXPECT_TRUE(contains(r.output, stray)) << r.output;
+        EXPECT_FALSE(fs::exists(output));
+    }
+    // Numbers that outgrow their padding are one numbering: 0998, 0999, 1000, 1001.
+    copyFixture(dir.path() / "thousand", {}, 998);
+    const BlenderSequence thousand(dir.path() / "thousand");
+    EXPECT_EQ(thousand.files().first, 998);
+    EXPECT_EQ(thousand.frameCount(), kFixtureFrames);
+    EXPECT_EQ(thousand.frameFile(3), dir.path() / "thousand" / "1001.exr");
+    // Unpadded: shot.8 .. shot.11 (two widths, one numbering).
+    copyFixture(dir.path() / "plain", {}, 8, "shot.", 1);
+    EXPECT_EQ(openFrameSource(dir.path() / "plain")->frameFile(3),
+              dir.path() / "plain" / "shot.11.exr");
+}
+
+// Issue 37 item 13: by default the first view layer with every required pass is read; when none
+// has them all, the error says which layer lacks which passes.
+TEST(BlenderNames, TheFirstCompleteViewLayerIsReadByDefault) {
+    test::TempFolder dir("blender-complete-layer");
+    // "A" (first in the file) has Combined and Depth but no Normal or Position; "ViewLayer" has
+    // all.
+    copyFixture(dir.path() / "in", [](int, std::map<std::string, Image>& channels) {
+        std::map<std::string, Image> added;
+        for (const auto& [name, image] : channels)
+            if (passOf(name) == "Combined" || passOf(name) == "Depth")
+                added.emplace("A" + name.substr(name.find('.')), image);
+        channels.merge(added);
+    });
+    std::string message = messageOf([&] {
+        const BlenderSequence sequence(dir.path() / "in");
+        EXPECT_EQ(sequence.viewLayer(), "ViewLayer");
+        EXPECT_EQ(sequence.readFrame(0).beauty.pixels,
+                  BlenderSequence(kFixture / "noisy").readFrame(0).beauty.pixels);
+    });
+    EXPECT_EQ(message, "(no error)");
+    message = messageOf([&] { BlenderSequence sequence(dir.path() / "in", "A"); });
+    EXPECT_TRUE(contains(message, "no Normal pass in view layer 'A'")) << message;
+
+    // No complete layer: "A" lacks Position, "B" lacks Depth.
+    copyFixture(dir.path() / "none", [](int, std::map<std::string, Image>& channels) {
+        std::map<std::string, Image> layers;
+        for (const auto& [name, image] : channels) {
+            const std::string pass = passOf(name), rest = name.substr(name.find('.'));
+            if (pass != "Position") layers.emplace("A" + rest, image);
+            if (pass != "Depth") layers.emplace("B" + rest, image);
+        }
+        channels = std::move(layers);
+    });
+    message = messageOf([&] { BlenderSequence sequence(dir.path() / "none"); });
+    EXPECT_TRUE(contains(message, (dir.path() / "none" / "0001.exr").string())) << message;
+    EXPECT_TRUE(contains(message, "'A' lacks Position")) << message;
+    EXPECT_TRUE(contains(message, "'B' lacks Depth")) << message;
+    EXPECT_TRUE(contains(message, "--view-layer")) << message;
+    const test::CliResult r = runCli("denoise " + quoted(dir.path() / "none") +
+                                     " --method jbf -o " + quoted(dir.path() / "out"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "'B' lacks Depth")) << r.output;
+    EXPECT_FALSE(fs::exists(dir.path() / "out"));
 }
 
 TEST(BlenderNames, ACourseFolderIsStillACourseFolder) {

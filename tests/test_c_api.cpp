@@ -2,7 +2,6 @@
 // denoises a rendered scene and matches the C++ API; every error path returns a code and a
 // message without crashing; settings have the command line's names.
 #include <gtest/gtest.h>
-
 #include <sys/resource.h>
 
 #include <atomic>
@@ -12,10 +11,10 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <thread>
 #include <regex>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "c_api/denoise_in_c.h"
@@ -391,7 +390,7 @@ TEST_F(CApi, BadImages) {
     EXPECT_EQ(rtdSetImage(denoiser_, nullptr, pixel, RTD_FORMAT_FLOAT3, 1, 1, 0, 0),
               RTD_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(rtdSetMatrices(denoiser_, nullptr, 2, pixel, pixel), RTD_ERROR_INVALID_ARGUMENT);
-    EXPECT_EQ(rtdSetMatrices(denoiser_, nullptr, 0, nullptr, nullptr), RTD_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(rtdSetMatrices(denoiser_, nullptr, 0, nullptr, pixel), RTD_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(rtdSetObjectCount(denoiser_, -1), RTD_ERROR_INVALID_ARGUMENT);
     takeError(device_);
 }
@@ -635,7 +634,6 @@ TEST_F(CApi, SettingsHaveTheCommandLinesNames) {
     EXPECT_FLOAT_EQ(rtdGetFloat(denoiser_, "motion-scale-y"), 1.0f);
 }
 
-
 // ---- issue 37: sizes, strides, object counts, threads, memory, IDs, broken passes ----
 
 // Binds every input of a w x h frame to `pixels` (zeros read as ID 0 and depth 0) and the
@@ -677,11 +675,12 @@ TEST_F(CApi, StridesAndSizesThatOverflowAreInvalidArguments) {
 
 // The same hole in the C++ FrameView's check.
 TEST(FrameViewChecks, AStrideThatOverflowsIsRefusedNamingTheImage) {
-    const std::vector<Frame> frames = renderSmallSequence("moving-objects", 16, 8, 1);
+    // An odd width: (5 - 1) * 2^63 wraps to 0, which the old check took for a small span.
+    const std::vector<Frame> frames = renderSmallSequence("moving-objects", 5, 4, 1);
     Denoiser denoiser(cpuSettings(Method::Atrous));
     FrameView view = viewOf(frames[0]);
-    view.normal = ImageView(view.normal.data, DataType::Float32, 3, std::size_t(1) << 63, 0);
-    std::vector<float> out(16 * 8 * 3);
+    view.normal = ImageView(view.normal.data, DataType::Float32, 3, std::size_t(1) << 63, 64);
+    std::vector<float> out(5 * 4 * 3);
     try {
         denoiser.processFrame(view, out.data());
         FAIL() << "a stride of 2^63 was accepted";
@@ -756,12 +755,11 @@ TEST_F(CApi, ASecondThreadIsRefusedWhileACallRuns) {
             const std::vector<float> matrices = flatMatrices(f), camera = flat(f.worldToCamera),
                                      screen = flat(f.worldToScreen);
             auto image = [&](const char* name, const void* data, RTDFormat format) {
-                ASSERT_EQ(whenFree(device_,
-                                   [&] {
-                                       return rtdSetImage(denoiser_, name, data, format, w, h, 0,
-                                                          0);
-                                   }),
-                          RTD_ERROR_NONE);
+                ASSERT_EQ(
+                    whenFree(
+                        device_,
+                        [&] { return rtdSetImage(denoiser_, name, data, format, w, h, 0, 0); }),
+                    RTD_ERROR_NONE);
             };
             image("color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3);
             image("normal", f.normal.pixels.data(), RTD_FORMAT_FLOAT3);
@@ -773,8 +771,8 @@ TEST_F(CApi, ASecondThreadIsRefusedWhileACallRuns) {
             ASSERT_EQ(whenFree(device_,
                                [&] {
                                    return rtdSetMatrices(denoiser_, matrices.data(),
-                                                         int(f.objectToWorld.size()),
-                                                         camera.data(), screen.data());
+                                                         int(f.objectToWorld.size()), camera.data(),
+                                                         screen.data());
                                }),
                       RTD_ERROR_NONE);
             ASSERT_EQ(whenFree(device_, [&] { return rtdExecute(denoiser_); }), RTD_ERROR_NONE);
@@ -831,6 +829,20 @@ TEST(CApiMemory, AFailedAllocationIsOutOfMemory) {
                 ::testing::ExitedWithCode(RTD_ERROR_OUT_OF_MEMORY),
                 "rtdExecute: cpu: out of memory");
 #endif
+}
+
+// All NULL unsets the matrices: a temporal method then needs them or motion again, and the
+// object count bounds a single-frame method's IDs.
+TEST_F(CApi, MatricesCanBeUnset) {
+    std::vector<float> out;
+    bind(frames_[0], out);
+    ASSERT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE);
+    ASSERT_EQ(rtdSetMatrices(denoiser_, nullptr, 0, nullptr, nullptr), RTD_ERROR_NONE);
+    EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_INVALID_OPERATION);
+    EXPECT_NE(takeError(device_).message.find("set the matrices"), std::string::npos);
+    ASSERT_EQ(rtdSetString(denoiser_, "method", "atrous"), RTD_ERROR_NONE);
+    ASSERT_EQ(rtdSetObjectCount(denoiser_, int(frames_[0].objectToWorld.size())), RTD_ERROR_NONE);
+    EXPECT_EQ(rtdExecute(denoiser_), RTD_ERROR_NONE) << takeError(device_).message;
 }
 
 // An int32 ID of INT_MIN is out of range, not "not an integer" (the float IDs' mark).

@@ -572,6 +572,23 @@ TEST(Cli, ClampedRadianceAndMissingNormalsAreReported) {
     }
 }
 
+// A frame whose depth pass is NaN everywhere (or whose IDs are all -1) comes back as noisy as it
+// came: the run succeeds, but the frame is named at once with the pass that broke it.
+TEST(Cli, AFrameWithoutUsableGeometryIsNamedWithItsPass) {
+    test::TempFolder dir("cli-no-geometry");
+    const fs::path in = dir.path() / "in";
+    writeSequence(in, 3);
+    Image depth = readExr(in / "depth_1.exr", {{"Z", "R", "Y"}});
+    for (float& z : depth.pixels) z = std::nanf("");
+    writeExr(in / "depth_1.exr", depth);
+    Result r = runCli(denoiseCommand(in, dir.path() / "out"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "NaN or Inf depth or position: read as background")) << r.output;
+    EXPECT_TRUE(contains(r.output, "(frame 1; is the depth pass broken?)")) << r.output;
+    EXPECT_FALSE(contains(r.output, "frame 0;")) << r.output;
+    EXPECT_FALSE(contains(r.output, "frame 2;")) << r.output;
+}
+
 }  // namespace
 }  // namespace rtd
 

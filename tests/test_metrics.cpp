@@ -2,13 +2,16 @@
 // it (table, JSON, CSV, PNGs, and errors that name the file).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <limits>
 #include <random>
 #include <sstream>
+#include <string>
 
 #include "metrics/metrics.h"
 #include "test_support.h"
@@ -49,16 +52,24 @@ float display(float linear, float exposure = 1.0f) {
 
 // SSIM straight from the definition: every pixel's restricted 11x11 window, weights
 // renormalised over it. The library's separable, banded version must agree.
-double bruteForceSsim(const Image& a, const Image& b) {
+// With a mask, only the pixels it scores count, in the windows and in the mean.
+double bruteForceSsim(const Image& a, const Image& b, const metrics::PixelMask& scored = {}) {
+    const auto isScored = [&](int x, int y) {
+        return scored.empty() || scored[std::size_t(y) * a.width + x];
+    };
     double total = 0.0;
+    int count = 0;
     for (int c = 0; c < 3; ++c)
         for (int y = 0; y < a.height; ++y)
             for (int x = 0; x < a.width; ++x) {
+                if (!isScored(x, y)) continue;
+                ++count;
                 double sw = 0, ma = 0, mb = 0, maa = 0, mbb = 0, mab = 0;
                 for (int dy = -5; dy <= 5; ++dy)
                     for (int dx = -5; dx <= 5; ++dx) {
                         const int xx = x + dx, yy = y + dy;
                         if (xx < 0 || yy < 0 || xx >= a.width || yy >= a.height) continue;
+                        if (!isScored(xx, yy)) continue;
                         const double w = std::exp(-(dx * dx + dy * dy) / (2.0 * 1.5 * 1.5));
                         const double va = a.at(xx, yy, c), vb = b.at(xx, yy, c);
                         sw += w;
@@ -73,7 +84,7 @@ double bruteForceSsim(const Image& a, const Image& b) {
                 total += ((2 * ma * mb + c1) * (2 * (mab - ma * mb) + c2)) /
                          ((ma * ma + mb * mb + c1) * (maa - ma * ma + mbb - mb * mb + c2));
             }
-    return total / (3.0 * a.width * a.height);
+    return total / double(count);
 }
 
 // ---- single metrics ----
@@ -200,6 +211,50 @@ TEST(Metrics, MismatchedImagesThrow) {
     metrics::SequenceComparer comparer;
     comparer.addFrame(constant(4, 4, 0.0f), constant(4, 4, 0.0f));
     EXPECT_THROW(comparer.addFrame(constant(5, 4, 0.0f), constant(5, 4, 0.0f)), Error);
+}
+
+// Issue 37 item 7: a reference pixel with a NaN or Inf (in any channel) has no right answer: it is
+// left out of every metric, which then scores the other pixels exactly.
+TEST(Metrics, NonFiniteReferencePixelsAreLeftOutOfEveryMetric) {
+    const int w = 9, h = 7;
+    Image reference = constant(w, h, 0.25f), previousReference = reference;
+    reference.at(2, 3, 0) = std::numeric_limits<float>::quiet_NaN();
+    reference.at(5, 1, 2) = std::numeric_limits<float>::infinity();
+    previousReference.at(0, 0, 1) = -std::numeric_limits<float>::infinity();
+    const Image result = constant(w, h, 0.75f);
+    // Every scored pixel is 0.75 against 0.25: the figures of two constant images.
+    const FrameMetrics expected = metrics::compareFrame(result, constant(w, h, 0.25f));
+    const FrameMetrics m = metrics::compareFrame(result, reference);
+    EXPECT_EQ(m.mse, 0.25);
+    EXPECT_NEAR(m.relMse, 0.25 / 0.0725, 1e-12);
+    EXPECT_DOUBLE_EQ(m.psnr, expected.psnr);
+    EXPECT_NEAR(m.ssim, expected.ssim, 1e-12);
+    EXPECT_EQ(metrics::mse(result, reference), 0.25);
+    EXPECT_NEAR(metrics::relMse(result, reference), 0.25 / 0.0725, 1e-12);
+    EXPECT_EQ(m.excludedPixels, 2u);
+    EXPECT_EQ(expected.excludedPixels, 0u);
+
+    // The temporal error leaves out the pixels either frame's reference lacks.
+    metrics::SequenceComparer comparer;
+    comparer.addFrame(result, previousReference);
+    const FrameMetrics second = comparer.addFrame(result, reference);
+    ASSERT_TRUE(second.temporalError.has_value());
+    EXPECT_EQ(*second.temporalError, 0.0);
+    EXPECT_EQ(second.mse, 0.25);
+    EXPECT_EQ(comparer.metrics().mean.excludedPixels, 3u);
+
+    // SSIM over the scored pixels only: a pattern whose NaN pixel is left out scores as the brute
+    // force over the other pixels' windows does; nothing left to score is an error, not a NaN.
+    Image patterned = pattern(w, h);
+    const Image noisy = withNoise(patterned, 0.1f, 7);
+    patterned.at(4, 4, 1) = std::numeric_limits<float>::quiet_NaN();
+    const metrics::PixelMask scored = metrics::finitePixels(patterned);
+    ASSERT_EQ(scored.size(), std::size_t(w * h));
+    EXPECT_EQ(metrics::excludedPixels(scored), 1u);
+    EXPECT_NEAR(metrics::ssim(toneMap(noisy), toneMap(patterned), scored),
+                bruteForceSsim(toneMap(noisy), toneMap(patterned), scored), 1e-12);
+    EXPECT_THROW(metrics::mse(result, constant(w, h, std::numeric_limits<float>::quiet_NaN())),
+                 Error);
 }
 
 // ---- images ----
@@ -403,6 +458,67 @@ TEST(CompareCli, WritesContactSheets) {
     r = runCli("compare " + folders + " --images " + quoted(dir.path() / "png4") + " --frames 0,7");
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("frame 7"), std::string::npos) << r.output;
+}
+
+// Whether a NaN is printed as a number ("nan", "-nan", "NaN"; the words "NaN/Inf" aside).
+bool containsNan(std::string text) {
+    for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
+    for (std::size_t at = text.find("nan"); at != std::string::npos; at = text.find("nan", at + 1))
+        if (at + 3 == text.size() || text[at + 3] != '/') return true;
+    return false;
+}
+
+// Issue 37 item 7: NaN/Inf pixels of a reference are left out of every metric, and the command
+// says how many; a reference with nothing left, or a result with NaN/Inf, fails: no NaN is ever
+// printed with exit status 0.
+TEST(CompareCli, NonFiniteReferencePixelsAreLeftOutAndCounted) {
+    test::TempFolder dir("compare-nonfinite");
+    writeFolders(dir.path(), 3);
+    const fs::path reference = dir.path() / "scene" / "reference";
+    Image broken = constant(kW, kH, 0.25f);
+    broken.at(3, 4, 1) = std::numeric_limits<float>::quiet_NaN();
+    broken.at(7, 2, 0) = std::numeric_limits<float>::infinity();
+    writeExr(reference / "reference_1.exr", broken);
+    const std::string folders = quoted(dir.path() / "out") + " " + quoted(reference);
+    Result r = runCli("compare " + folders + " --json " + quoted(dir.path() / "m.json") +
+                      " --csv " + quoted(dir.path() / "m.csv"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_FALSE(containsNan(r.output)) << r.output;
+    // Frame 1 scores its other pixels: the figures of every frame (MSE 0.25, relMSE 3.4483).
+    EXPECT_NE(r.output.find("    1   2.5000e-01   3.4483e+00"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(" mean   2.5000e-01   3.4483e+00"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("warning: " + (reference / "reference_1.exr").string() +
+                            ": 2 pixels with NaN/Inf left out of every metric"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(containsNan(readText(dir.path() / "m.json")));
+    EXPECT_NE(readText(dir.path() / "m.json").find("\"excluded_reference_pixels\": 2\n}"),
+              std::string::npos);
+    EXPECT_FALSE(containsNan(readText(dir.path() / "m.csv")));
+
+    // A reference with no finite pixel leaves nothing to score.
+    writeExr(reference / "reference_2.exr",
+             constant(kW, kH, std::numeric_limits<float>::quiet_NaN()));
+    r = runCli("compare " + folders + " --json " + quoted(dir.path() / "m2.json"));
+    EXPECT_NE(r.exitCode, 0) << r.output;
+    EXPECT_NE(
+        r.output.find((reference / "reference_2.exr").string() + ": every pixel holds NaN/Inf"),
+        std::string::npos)
+        << r.output;
+    EXPECT_FALSE(containsNan(r.output.substr(0, r.output.find("error:")))) << r.output;
+    EXPECT_FALSE(fs::exists(dir.path() / "m2.json"));
+
+    // A result with NaN: its MSE is NaN (a broken result must not look good), and the run fails.
+    writeExr(reference / "reference_2.exr", constant(kW, kH, 0.25f));
+    Image result = constant(kW, kH, 0.75f);
+    result.at(1, 1, 0) = std::numeric_limits<float>::quiet_NaN();
+    writeExr(dir.path() / "out" / "result_2.exr", result);
+    r = runCli("compare " + folders);
+    EXPECT_NE(r.exitCode, 0) << r.output;
+    EXPECT_NE(
+        r.output.find((dir.path() / "out" / "result_2.exr").string() + ": 1 pixel with NaN/Inf"),
+        std::string::npos)
+        << r.output;
 }
 
 TEST(CompareCli, BadInputFailsNamingTheFile) {

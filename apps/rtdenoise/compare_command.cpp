@@ -170,7 +170,8 @@ std::string json(const metrics::SequenceMetrics& s, const std::vector<int>& indi
     for (std::size_t i = 0; i < s.frames.size(); ++i)
         out += fmt::format("    {{\"frame\": {}, {}}}{}\n", indices[i], jsonFields(s.frames[i]),
                            i + 1 < s.frames.size() ? "," : "");
-    out += fmt::format("  ],\n  \"mean\": {{{}}}\n}}\n", jsonFields(s.mean));
+    out += fmt::format("  ],\n  \"mean\": {{{}}},\n  \"excluded_reference_pixels\": {}\n}}\n",
+                       jsonFields(s.mean), s.mean.excludedPixels);
     return out;
 }
 
@@ -185,6 +186,29 @@ std::string csv(const metrics::SequenceMetrics& s, const std::vector<int>& indic
         out += csvRow(std::to_string(indices[i]), s.frames[i]);
     out += csvRow("mean", s.mean);
     return out;
+}
+
+// Files with their counts of pixels holding NaN/Inf.
+using PixelCounts = std::vector<std::pair<fs::path, std::size_t>>;
+
+// "DIR/reference_1.exr: 2 pixels with NaN/Inf", or for several files the total and the files.
+std::string nonFiniteText(const PixelCounts& files) {
+    const auto pixels = [](std::size_t n) {
+        return fmt::format("{} pixel{}", n, n == 1 ? "" : "s");
+    };
+    if (files.size() == 1)
+        return fmt::format("{}: {} with NaN/Inf", files[0].first.string(), pixels(files[0].second));
+    std::size_t total = 0;
+    std::string listed;
+    constexpr std::size_t kListed = 10;
+    for (std::size_t i = 0; i < files.size(); ++i) {
+        total += files[i].second;
+        if (i < kListed)
+            listed +=
+                fmt::format("{}{}: {}", i ? ", " : "", files[i].first.string(), files[i].second);
+    }
+    if (files.size() > kListed) listed += ", ...";
+    return fmt::format("{} with NaN/Inf in {} files ({})", pixels(total), files.size(), listed);
 }
 
 // ---- the command ----
@@ -331,6 +355,7 @@ int runCompare(const CompareOptions& options) {
     };
     std::future<FramePair> next = readAsync(compared[0]);
     std::string firstSize;
+    PixelCounts excluded, brokenResults;
     for (int n = 0; n < frameCount; ++n) {
         const int i = compared[std::size_t(n)];
         FramePair pair = next.get();
@@ -345,8 +370,21 @@ int runCompare(const CompareOptions& options) {
                             framePath(options.results, "result", i).string(), sizeText(pair.result),
                             framePath(options.results, "result", compared[0]).string(), firstSize));
         }
+        // A reference pixel with NaN/Inf has no right answer: left out of every metric, and
+        // counted; a reference of nothing else leaves nothing to score.
+        const fs::path referenceFile = references.file(i);
+        const metrics::PixelMask scored = metrics::finitePixels(pair.reference);
+        if (!scored.empty() && metrics::excludedPixels(scored) == scored.size())
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("{}: every pixel holds NaN/Inf: nothing to score {} against",
+                                    referenceFile.string(),
+                                    framePath(options.results, "result", i).string()));
         if (n == 0 || compared[std::size_t(n) - 1] != i - 1) comparer.emplace(options.exposure);
         frameMetrics.push_back(comparer->addFrame(pair.result, pair.reference));
+        if (frameMetrics.back().excludedPixels > 0)
+            excluded.emplace_back(referenceFile, frameMetrics.back().excludedPixels);
+        if (const std::size_t broken = metrics::excludedPixels(metrics::finitePixels(pair.result)))
+            brokenResults.emplace_back(framePath(options.results, "result", i), broken);
         if (sheets && std::binary_search(chosen.begin(), chosen.end(), i)) {
             std::optional<Image> beauty;
             if (input) {
@@ -381,6 +419,17 @@ int runCompare(const CompareOptions& options) {
         }
         if (!options.json.empty()) fmt::print("json: {}\n", options.json.string());
         if (!options.csv.empty()) fmt::print("csv: {}\n", options.csv.string());
+    }
+    if (!excluded.empty())
+        fmt::print(stderr, "rtdenoise: warning: {} left out of every metric\n",
+                   nonFiniteText(excluded));
+    // A result with NaN/Inf is broken: its MSE and relMSE say so as NaN, and the exit status too.
+    if (!brokenResults.empty()) {
+        fmt::print(stderr,
+                   "rtdenoise: error: {}: a broken result, so MSE and relMSE are NaN/Inf (PSNR, "
+                   "SSIM and the temporal error take those pixels as black)\n",
+                   nonFiniteText(brokenResults));
+        return 1;
     }
     return 0;
 }

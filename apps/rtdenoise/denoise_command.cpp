@@ -15,6 +15,9 @@
 #include <future>
 #include <map>
 #include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "commands.h"
 #include "progress.h"
@@ -156,6 +159,53 @@ std::string inputWarning(const FrameCounts& perFrame, const std::string& what) {
     return fmt::format("{} {} in {} frames ({})", total, what, perFrame.size(), frames);
 }
 
+// The passes a frame's warning (rtd::inputWarning) points at: where most of it lost its geometry,
+// which of the frame's passes did it.
+std::string brokenPasses(const Frame& frame, const FrameStats& stats) {
+    if (stats.nonFiniteGeometry * 2 > stats.pixels) {
+        long long depth = 0, position = 0;
+        for (std::size_t i = 0; i < frame.objectId.size(); ++i) {
+            if (frame.objectId[i] < 0) continue;
+            depth += std::isfinite(frame.depth.pixels[i]) ? 0 : 1;
+            const float* p = &frame.position.pixels[3 * i];
+            position += std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) ? 0 : 1;
+        }
+        return depth && position ? "the depth and position passes"
+               : depth           ? "the depth pass"
+                                 : "the position pass";
+    }
+    if (stats.missingNormals * 2 > stats.pixels) return "the normal pass";
+    return "the object ID pass";
+}
+
+// Frames left mostly undenoised by a broken pass: each named at the frame, up to this many,
+// then counted (a whole shot of them must not bury the run's output).
+constexpr int kFrameWarningsShown = 10;
+
+std::string sizeText(const ExrSize& size) {
+    return fmt::format("{}x{}", size.width, size.height);
+}
+
+// "4 frames of 64x48", or with frames of several sizes "4 frames (3 of 64x48, 1 of 32x24)", the
+// sizes in the order they first appear.
+std::string framesAndSizes(const std::vector<ExrSize>& sizes) {
+    std::vector<std::pair<std::string, int>> counts;
+    for (const ExrSize& size : sizes) {
+        const std::string text = sizeText(size);
+        const auto entry = std::find_if(counts.begin(), counts.end(),
+                                        [&](const auto& count) { return count.first == text; });
+        if (entry == counts.end())
+            counts.emplace_back(text, 1);
+        else
+            ++entry->second;
+    }
+    if (counts.size() == 1) return fmt::format("{} frames of {}", sizes.size(), counts[0].first);
+    std::string listed;
+    for (const auto& [text, count] : counts)
+        listed += fmt::format("{}{} of {}", listed.empty() ? "" : ", ", count, text);
+    return fmt::format("{} frames ({})", sizes.size(), listed);
+}
+
 int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) {
     // Everything that can be checked is checked before anything is created (not even the output
     // folder): options, output paths, every frame's files up to their EXR headers. Only a bad
@@ -189,6 +239,14 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     removeEarlierOutputs(options, settings, frames);
     for (const std::string& warning : source->warnings())  // once per run, not per frame
         fmt::print(stderr, "rtdenoise: warning: {}\n", warning);
+    // A frame of another size starts afresh (the denoiser's buffers are remade, by design): said
+    // at that frame, so that a stray render of another size is not taken for a filter's fault.
+    for (int i = 1; i < frames; ++i)
+        if (sizes[i].width != sizes[i - 1].width || sizes[i].height != sizes[i - 1].height)
+            fmt::print(
+                stderr, "rtdenoise: warning: {}: {}, but the frame before it is {}: {}\n",
+                source->frameFile(i).string(), sizeText(sizes[i]), sizeText(sizes[i - 1]),
+                history ? "the history restarts at this frame" : "its result is of another size");
     if (!options.quiet) {
         fmt::print(stderr, "rtdenoise: {} frames from {}, method {}, device {}\n", frames,
                    source->describe(), toString(settings.method), denoiser.deviceName());
@@ -200,6 +258,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     std::vector<std::vector<double>> passTimes(denoiser.passes().size());
     std::vector<double> frameTimes, readWaitTimes, writeTimes;
     FrameCounts nonFinite, clamped, missingNormals;
+    int framesWithoutGeometry = 0;
     auto start = Clock::now();
 
     // Frame i+1 is read on another thread while frame i is denoised.
@@ -249,6 +308,12 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         if (stats.nonFiniteReplaced > 0) nonFinite.emplace_back(i, stats.nonFiniteReplaced);
         if (stats.radianceClamped > 0) clamped.emplace_back(i, stats.radianceClamped);
         if (stats.missingNormals > 0) missingNormals.emplace_back(i, stats.missingNormals);
+        if (const std::string broken = rtd::inputWarning(stats); !broken.empty()) {
+            if (++framesWithoutGeometry <= kFrameWarningsShown)
+                progress.warn(fmt::format("{}: {} (frame {}; is {} broken?)",
+                                          source->frameFile(i).string(), broken, i,
+                                          brokenPasses(frame, stats)));
+        }
 
         std::vector<std::pair<std::string, Image>> debug;
         if (options.debug && (usesHistory(settings.method))) {
@@ -263,11 +328,15 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         progress.update(i + 1);
     }
     if (writing.valid()) writeTimes.push_back(writing.get());
-    const Image& result = results[0];
     if (video) video->finish();
     progress.finish();
     double total = std::chrono::duration<double>(Clock::now() - start).count();
 
+    if (framesWithoutGeometry > kFrameWarningsShown)
+        fmt::print(stderr,
+                   "rtdenoise: warning: {} frames in all were mostly without usable geometry "
+                   "(the first {} named above)\n",
+                   framesWithoutGeometry, kFrameWarningsShown);
     if (!nonFinite.empty())
         fmt::print(stderr, "rtdenoise: warning: {}\n",
                    inputWarning(nonFinite, "NaN/Inf radiance values replaced by 0"));
@@ -281,8 +350,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
                                 "object pixels with a zero or NaN/Inf normal (filtered among "
                                 "themselves, without a normal term)"));
     if (!options.quiet) {
-        fmt::print("{} frames of {}x{} in {:.2f} s ({:.1f} fps overall, I/O included)\n", frames,
-                   result.width, result.height, total, frames / total);
+        fmt::print("{} in {:.2f} s ({:.1f} fps overall, I/O included)\n", framesAndSizes(sizes),
+                   total, frames / total);
         fmt::print("denoise  median {:8.2f} ms/frame  (device {})\n", median(frameTimes),
                    denoiser.deviceName());
         for (std::size_t p = 0; p < passTimes.size(); ++p)

@@ -31,6 +31,12 @@ void Progress::update(int done) {
     std::fflush(stderr);
 }
 
+void Progress::warn(const std::string& message) {
+    // On a terminal the progress line is erased first; the next update() draws it again.
+    fmt::print(stderr, "{}rtdenoise: warning: {}\n", terminal_ && !quiet_ ? "\r\033[K" : "",
+               message);
+}
+
 void Progress::finish() {
     if (!quiet_ && terminal_) fmt::print(stderr, "\n");
 }

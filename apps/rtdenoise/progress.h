@@ -11,6 +11,8 @@ class Progress {
   public:
     Progress(int total, bool quiet);
     void update(int done);  // `done` frames finished
+    // A warning line on stderr (shown when quiet too), clear of the progress line on a terminal.
+    void warn(const std::string& message);
     void finish();
 
   private:

@@ -151,8 +151,9 @@ bool isFramePattern(const std::filesystem::path& path);
 // one prefix: "0001.exr" or "name_0001.exr"), or a pattern whose file name holds one %d, %0Nd or
 // run of N '#' (Blender's: the number zero-padded to N digits). Numbering may start anywhere but
 // must be contiguous. Throws MissingFile (no such folder, no matching file), InvalidInput naming
-// the first missing file on a gap, or for a folder of several names, or a matching entry that
-// is not a regular file.
+// the first missing file on a gap, or for a folder of several names, or of files of one name
+// that fit no single padding (0001.exr and 5.exr: it names each numbering's files), or a
+// matching entry that is not a regular file.
 NumberedFiles findNumberedFiles(const std::filesystem::path& input,
                                 std::string_view extension = ".exr");
 
@@ -173,15 +174,17 @@ constexpr float kCyclesMissDepth = 1e10f;
 class BlenderSequence : public FrameSource {
   public:
     // `input` as findNumberedFiles takes it. `viewLayer` names the view layer to read (empty:
-    // the first one, in the file's channel order, with a colour pass and Depth). Reads the first
+    // the first one, in the file's channel order, with every required pass; when several layers
+    // are there and none has them all, InvalidInput says what each lacks). Reads the first
     // file's header: a required pass missing there throws InvalidInput naming the pass, the file
-    // and how to enable it in Blender.
+    // and how to enable it in Blender; a pass present in part (Normal without Z) names the
+    // channels missing.
     explicit BlenderSequence(const std::filesystem::path& input, std::string viewLayer = {});
 
     int frameCount() const override { return files_.count; }
     Frame readFrame(int index) const override;
-    // Every file's header holds the passes the first one has (the sequence reads the same
-    // passes from each), the view layer, and a plausible size.
+    // Every file's header holds the passes the first one has and no optional pass it lacks (the
+    // sequence reads the same passes from each), the view layer, and a plausible size.
     std::vector<ExrSize> checkFrames(int count) const override;
     std::string describe() const override;
     std::filesystem::path frameFile(int index) const override { return files_.file(index); }

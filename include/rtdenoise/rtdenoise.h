@@ -155,7 +155,8 @@ RTD_API RTDError rtdSetImage(RTDDenoiser denoiser, const char* name, const void*
                              size_t rowStride);
 /* This frame's matrices, row-major (m[row * 4 + col]) on column vectors: objectToWorld holds
  * objectCount of them (object k's local-to-world), worldToCamera and worldToScreen one each
- * ((s.x / s.w, s.y / s.w): the pixel, its centre at +0.5). Copied; kept until set again. */
+ * ((s.x / s.w, s.y / s.w): the pixel, its centre at +0.5). Copied; kept until set again.
+ * All NULL with objectCount 0 unsets them (then rtdSetObjectCount bounds the IDs again). */
 RTD_API RTDError rtdSetMatrices(RTDDenoiser denoiser, const float* objectToWorld, int objectCount,
                                 const float* worldToCamera, const float* worldToScreen);
 /* With motion vectors and no matrices: IDs are -1..objectCount-1. */

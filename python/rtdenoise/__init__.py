@@ -23,7 +23,8 @@ import numbers
 import os
 import re
 import threading
-from typing import Any, Mapping, Optional, Sequence, Union
+import warnings
+from typing import Any, Mapping, NoReturn, Optional, Sequence, Union
 
 import numpy as np
 
@@ -64,6 +65,9 @@ _DEVICES = {
     "cuda": _native.DEVICE_CUDA,
 }
 _TEMPORAL_METHODS = ("temporal", "svgf", "detail")
+_INT32_MAX = 2**31 - 1
+# The library clamps radiance and albedo beyond +-kMaxRadiance (1e16) to it.
+_MAX_RADIANCE = float(_native.MAX_RADIANCE)
 
 
 # ---- matrices and frames ----
@@ -316,6 +320,19 @@ def _image(name: str, value: Any, size: tuple, channels: Sequence[int], like: st
     return array
 
 
+def _radiance(array: np.ndarray) -> np.ndarray:
+    """A radiance or albedo array wider than float32 as float32, its finite values clamped to
+    +-kMaxRadiance first as the library would clamp them: cast, 1e300 would become Inf, which the
+    library replaces by 0 (a black pixel). NaN and +-Inf stay as they are (replaced by 0)."""
+    if array.dtype.kind != "f" or array.dtype.itemsize <= 4:
+        return array
+    clamped = np.clip(array, -_MAX_RADIANCE, _MAX_RADIANCE).astype(np.float32)
+    infinite = np.isinf(array)  # np.clip made them +-kMaxRadiance
+    if infinite.any():
+        clamped[infinite] = array[infinite]
+    return clamped
+
+
 def _one_channel(name: str, value: Any, size: tuple, like: str) -> Optional[np.ndarray]:
     """An optional 1-channel input as float (the C API reads float or half)."""
     if value is None:
@@ -366,7 +383,28 @@ def _object_count_of(ids: np.ndarray) -> int:
     if ids.size == 0:
         return 0
     top = np.nanmax(ids) if ids.dtype.kind == "f" else ids.max()
-    return int(np.rint(top)) + 1 if np.isfinite(top) else 0
+    count = int(np.rint(top)) + 1 if np.isfinite(top) else 0
+    if count > _INT32_MAX:
+        raise Error(
+            f"ids: ID {count - 1} is out of range: the library takes IDs up to "
+            f"{_INT32_MAX - 1} (object_count up to {_INT32_MAX})",
+            ErrorCode.INVALID_INPUT,
+        )
+    return count
+
+
+def _checked_object_count(value: Any) -> Optional[int]:
+    """object_count as an int in the library's range 0..2^31-1, or an InvalidArgumentError."""
+    if value is None:
+        return None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise InvalidArgumentError(
+            f"object_count: expected an int in 0..{_INT32_MAX}, got {type(value).__name__} "
+            f"{value!r}"
+        )
+    if not 0 <= int(value) <= _INT32_MAX:
+        raise InvalidArgumentError(f"object_count: {value} is out of range 0..{_INT32_MAX}")
+    return int(value)
 
 
 def _setting_name(name: str) -> str:
@@ -384,7 +422,8 @@ class Denoiser:
     svgf_iterations=3, outlier=False, spatial_filter="jbf", depth_kind="ray-distance",
     motion_scale=(1, -1)); `rtdenoise denoise --help` lists them with their ranges.
     A bad method, device, setting name or value raises InvalidArgumentError; a device this
-    build or machine lacks raises Error with code UNSUPPORTED_DEVICE.
+    build or machine lacks raises Error with code UNSUPPORTED_DEVICE. A Denoiser cannot be
+    copied or pickled (a copy would share its history): make one per sequence.
     """
 
     def __init__(self, method: Optional[str] = None, device: str = "default", **settings: Any):
@@ -397,7 +436,12 @@ class Denoiser:
         self._core = _native.Denoiser(method and method.lower(), _DEVICES[device.lower()])
         self._method = self._core.get("method")  # the library's name, the default's too
         self._depth_kind = "view-z"
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # held by the one call under way (_exclusive)
+        self._owner: Optional[int] = None  # the thread holding it
+        self._closing = False
+        # The library keeps the last matrices given, and their count then bounds the IDs of a
+        # frame without motion: see denoise().
+        self._matrices_given = False
         for name, value in settings.items():
             self.set(name, value)
 
@@ -489,7 +533,8 @@ class Denoiser:
         one object, background where the normal is 0). albedo: optional, as color.
         motion (H, W, 2 or 3): pixels, previous = current + motion; or matrices (a Matrices,
         a mapping, a frame's): object_to_world (K, 4, 4), world_to_camera, world_to_screen.
-        object_count: with motion and no matrices, IDs are -1..object_count-1 (None: max + 1).
+        object_count: without matrices, IDs are -1..object_count-1 (None: the largest ID + 1;
+        at most 2^31-1); no matrices are built for it.
         confidence (H, W): optional history confidence in [0, 1] (NRD's IN_DIFF_CONFIDENCE: 0
         where the lighting changed, drop the history; clamped, NaN as 1).
         specular (H, W, 3 or 4), roughness (H, W), hit_distance (H, W): the optional split
@@ -501,14 +546,16 @@ class Denoiser:
         to keep its alpha).
 
         float32 and float16 arrays (int32 ids) are read where they lie when each pixel's values
-        are contiguous (a slice such as rgba[..., :3] is); others are converted to float32.
+        are contiguous (a slice such as rgba[..., :3] is); others are converted to float32,
+        float64 color, albedo and specular clamped to +-1e16 first (as the library clamps
+        float32 ones; cast, a value beyond float32's range would be Inf, replaced by 0).
         """
         color = np.asarray(color)
         if color.ndim != 3:
             raise InvalidArgumentError(
                 f"color: shape {_shape_text(color.shape)}, expected (H, W, 3 or 4)"
             )
-        color = _image("color", color, color.shape[:2], (3, 4), "")
+        color = _radiance(_image("color", color, color.shape[:2], (3, 4), ""))
         size = color.shape[:2]
         like = " like color"
         normal = _image("normal", normal, size, (3, 4), like)
@@ -552,20 +599,22 @@ class Denoiser:
             elif ids.dtype.kind == "f" and ids.dtype != np.float32:  # the C API rounds float32
                 ids = ids.astype(np.float32)
         if albedo is not None:
-            albedo = _image("albedo", albedo, size, (3, 4), like)
+            albedo = _radiance(_image("albedo", albedo, size, (3, 4), like))
         confidence = _one_channel("confidence", confidence, size, like)
         if specular is not None:
-            specular = _image("specular", specular, size, (3, 4), like)
+            specular = _radiance(_image("specular", specular, size, (3, 4), like))
         roughness = _one_channel("roughness", roughness, size, like)
         hit_distance = _one_channel("hit_distance", hit_distance, size, like)
+        object_count = _checked_object_count(object_count)
         if object_count is None:
             object_count = _object_count_of(ids)
-        if matrices is None and motion is None:
-            # A single-frame method reprojects nothing, but the library takes a frame with
-            # motion or matrices: identities stand in for the latter.
+        if matrices is None and motion is None and self._matrices_given:
+            # A single-frame method reads no matrices and the object count alone bounds its IDs,
+            # but the library would take the matrices of an earlier frame (and their count):
+            # identities replace them. Only then: they cost 64 bytes per object.
             identity = np.eye(4, dtype=np.float32)
-            count = max(int(object_count), 1)
-            matrices = Matrices(np.broadcast_to(identity, (count, 4, 4)).copy(), identity, identity)
+            everywhere = np.broadcast_to(identity, (object_count, 4, 4))
+            matrices = Matrices(np.ascontiguousarray(everywhere), identity, identity)
 
         result, written = self._output(out, size)
         inputs = {
@@ -595,15 +644,19 @@ class Denoiser:
                         matrices.world_to_camera,
                         matrices.world_to_screen,
                     )
-                else:  # motion alone: the object count bounds the IDs
-                    self._core.set_object_count(max(int(object_count), 0))
+                    self._matrices_given = True
+                else:  # motion, or a single-frame method: the object count bounds the IDs
+                    self._core.set_object_count(object_count)
                 self._core.execute()
+                broken = self._core.frame_warning()
             finally:
                 # Holds no reference to the caller's arrays between frames.
                 for name in list(inputs) + ["output"]:
                     self._core.set_image(name, None, 0, 0, 0)
         if written is not result:
             np.copyto(result, written, casting="unsafe")
+        if broken:  # a broken pass: the frame came back as noisy as it went in
+            warnings.warn(f"rtdenoise: {broken}", RuntimeWarning, stacklevel=2)
         return result
 
     def denoise_frame(self, frame: Frame, out: Optional[np.ndarray] = None) -> np.ndarray:
@@ -611,8 +664,25 @@ class Denoiser:
         return self.denoise(**frame.inputs(), out=out)
 
     def close(self) -> None:
-        """Frees the denoiser and its device memory now (else when it is collected)."""
-        self._core = None
+        """Frees the denoiser and its device memory now (else when it is collected). A call
+        under way in another thread finishes its frame first; calls after it raise Error."""
+        if self._owner == threading.get_ident():
+            raise Error(
+                "close() inside a call of this denoiser: close it after the call returns",
+                ErrorCode.INVALID_OPERATION,
+            )
+        self._closing = True  # calls that start while close() waits are refused, not queued
+        with self._lock:
+            self._core = None
+
+    def _not_copyable(self, *args) -> NoReturn:
+        raise Error(
+            "a Denoiser cannot be copied or pickled: the copy would share its history (one "
+            "sequence's). Make another with rtdenoise.Denoiser(method, device, **settings)",
+            ErrorCode.INVALID_OPERATION,
+        )
+
+    __copy__ = __deepcopy__ = __reduce_ex__ = __reduce__ = _not_copyable
 
     def __enter__(self) -> "Denoiser":
         return self
@@ -621,28 +691,34 @@ class Denoiser:
         self.close()
 
     def __repr__(self) -> str:
-        state = self._core.device_name if self._core is not None else "closed"
+        core = self._core  # read once: close() in another thread may clear it
+        state = core.device_name if core is not None else "closed"
         return f"<rtdenoise.Denoiser {self._method} on {state}>"
 
     # -- helpers --
 
     def _open(self):
-        if self._core is None:
+        core = self._core
+        if core is None or self._closing:
             raise Error("the denoiser is closed", ErrorCode.INVALID_OPERATION)
-        return self._core
+        return core
 
     @contextlib.contextmanager
     def _exclusive(self):
-        """Holds the denoiser for one call: a second thread gets an error, not a torn frame."""
+        """Holds the denoiser for one call: a second thread gets an error, not a torn frame,
+        and close() waits for the call."""
         self._open()
         if not self._lock.acquire(blocking=False):
             raise Error(
                 "the denoiser is in use by another thread: use one Denoiser per thread",
                 ErrorCode.INVALID_OPERATION,
             )
+        self._owner = threading.get_ident()
         try:
+            self._open()  # again, under the lock: close() may have run meanwhile
             yield
         finally:
+            self._owner = None
             self._lock.release()
 
     def _bind(self, name: str, array: Optional[np.ndarray], channels: int) -> None:

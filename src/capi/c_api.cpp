@@ -445,8 +445,8 @@ void execute(RTDDenoiser d) {
     view.objectCount = d->objectCount;
     // Without matrices (motion vectors, or a single-frame method) objectCount alone bounds the
     // IDs: no per-object matrix is built, whatever the count.
-    view.objectToWorld = d->hasMatrices && !d->objectToWorld.empty() ? d->objectToWorld.data()
-                                                                     : nullptr;
+    view.objectToWorld =
+        d->hasMatrices && !d->objectToWorld.empty() ? d->objectToWorld.data() : nullptr;
     if (!motion && d->hasMatrices) view.objectCount = int(d->objectToWorld.size());
     view.worldToCamera = d->worldToCamera;
     view.worldToScreen = d->worldToScreen;
@@ -763,8 +763,8 @@ RTDError rtdSetImage(RTDDenoiser d, const char* name, const void* ptr, RTDFormat
         const std::size_t pixel = pixelStride ? pixelStride : pixelBytes;
         const std::optional<std::size_t> packedRow = rtd::checkedProduct(width, pixel);
         const std::optional<std::size_t> span =
-            packedRow ? rtd::imageSpanBytes(width, height, pixel, rowStride ? rowStride : *packedRow,
-                                            pixelBytes)
+            packedRow ? rtd::imageSpanBytes(width, height, pixel,
+                                            rowStride ? rowStride : *packedRow, pixelBytes)
                       : std::nullopt;
         if (!span || !rtd::fitsAddressSpace(ptr, *span))
             fail(RTD_ERROR_INVALID_ARGUMENT,
@@ -785,6 +785,11 @@ RTDError rtdSetMatrices(RTDDenoiser d, const float* objectToWorld, int objectCou
                         const float* worldToCamera, const float* worldToScreen) {
     return guarded(deviceOf(d), "rtdSetMatrices", [&] {
         const ExclusiveUse use(d);
+        if (!objectToWorld && objectCount == 0 && !worldToCamera && !worldToScreen) {
+            d->objectToWorld.clear();
+            d->hasMatrices = false;
+            return;
+        }
         if (objectCount < 0 || (objectCount > 0 && !objectToWorld))
             fail(RTD_ERROR_INVALID_ARGUMENT,
                  fmt::format("objectToWorld is NULL or objectCount {} is negative", objectCount));

@@ -25,9 +25,8 @@ inline std::optional<std::size_t> imageSpanBytes(std::size_t width, std::size_t 
     if (__builtin_mul_overflow(width - 1, pixelStride, &lastColumn) ||
         __builtin_mul_overflow(height - 1, rowStride, &lastRow) ||
         __builtin_add_overflow(lastColumn, lastRow, &span) ||
-        __builtin_add_overflow(span, pixelBytes, &span) ||
-        span > std::size_t(PTRDIFF_MAX) || pixelStride > std::size_t(PTRDIFF_MAX) ||
-        rowStride > std::size_t(PTRDIFF_MAX))
+        __builtin_add_overflow(span, pixelBytes, &span) || span > std::size_t(PTRDIFF_MAX) ||
+        pixelStride > std::size_t(PTRDIFF_MAX) || rowStride > std::size_t(PTRDIFF_MAX))
         return std::nullopt;
     return span;
 }

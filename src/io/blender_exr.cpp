@@ -132,10 +132,70 @@ void requireFolder(const fs::path& folder, const fs::path& input) {
         throw Error(ErrorCode::MissingFile, folder.string() + ": not a folder");
 }
 
+// The padding widths a file's number fits, as numberOf reads it: zero-padded "0001" only 4,
+// unpadded "12" 1 or 2.
+struct Widths {
+    int narrowest = 1;
+    int widest = 1;
+};
+Widths widthsOf(std::string_view digits) {
+    const int size = int(digits.size());
+    return {digits.size() > 1 && digits[0] == '0' ? size : 1, size};
+}
+
+// "0001.exr" (one file), "0001.exr, 0002.exr", or "4 files, 0001.exr to 0004.exr".
+std::string describeFiles(std::vector<std::string> names) {
+    std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+        return a.size() != b.size() ? a.size() < b.size() : a < b;  // numeric order
+    });
+    if (names.size() <= 2) {
+        std::string out;
+        for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
+        return out;
+    }
+    return fmt::format("{} files, {} to {}", names.size(), names.front(), names.back());
+}
+
+// The numbers of one name ("", "frame_") as its files write them ("0001", "5").
+using NumbersByPrefix = std::map<std::string, std::vector<std::string>>;
+
+// A folder whose files of one name fit no single padding (0001..0004.exr and 5.exr): each
+// numbering with its files, in an error asking for a pattern. Reading either one would silently
+// skip the other's files.
+Error severalNumberings(const fs::path& folder, const std::string& prefix,
+                        std::vector<std::string> numbers, std::string_view extension) {
+    std::vector<std::pair<std::string, std::vector<std::string>>> numberings;  // pattern, files
+    while (!numbers.empty()) {
+        int width = 1;
+        for (const std::string& digits : numbers)
+            width = std::max(width, widthsOf(digits).narrowest);
+        std::vector<std::string> files;
+        std::erase_if(numbers, [&](const std::string& digits) {
+            if (widthsOf(digits).widest < width) return false;
+            files.push_back(prefix + digits + std::string(extension));
+            return true;
+        });
+        numberings.emplace_back(
+            prefix + std::string(std::size_t(width), '#') + std::string(extension),
+            std::move(files));
+    }
+    std::string listed;
+    for (const auto& [pattern, files] : numberings)
+        listed +=
+            fmt::format("{}{}: {}", listed.empty() ? "" : "; ", pattern, describeFiles(files));
+    const auto largest = std::max_element(
+        numberings.begin(), numberings.end(),
+        [](const auto& a, const auto& b) { return a.second.size() < b.second.size(); });
+    return Error(ErrorCode::InvalidInput,
+                 fmt::format("{}: numbered files of several numberings ({}): name one with a "
+                             "pattern, e.g. {}, or move the other files away",
+                             folder.string(), listed, (folder / largest->first).string()));
+}
+
 // In a folder without a pattern: the one name ("", "frame_") its numbered files share, padded as
-// the shortest number is ("0001": 4 digits).
+// the shortest number is ("0001": 4 digits). Every file of that name must fit that padding.
 Pattern patternOfFolder(const fs::path& folder, std::string_view extension) {
-    std::map<std::string, int> shortestDigits;  // prefix -> digits of its shortest number
+    NumbersByPrefix numbersByPrefix;
     std::error_code ec;
     for (fs::directory_iterator it(folder, ec); !ec && it != fs::directory_iterator();
          it.increment(ec)) {
@@ -145,32 +205,40 @@ Pattern patternOfFolder(const fs::path& folder, std::string_view extension) {
         std::size_t digitsStart = stem.size();
         while (digitsStart > 0 && isDigit(stem[digitsStart - 1])) --digitsStart;
         if (digitsStart == stem.size()) continue;
-        const std::string prefix = stem.substr(0, digitsStart);
-        const int digits = int(stem.size() - digitsStart);
-        auto [entry, added] = shortestDigits.emplace(prefix, digits);
-        if (!added) entry->second = std::min(entry->second, digits);
+        numbersByPrefix[stem.substr(0, digitsStart)].push_back(stem.substr(digitsStart));
     }
     if (ec) throw Error(ErrorCode::IoFailure, folder.string() + ": cannot list: " + ec.message());
-    if (shortestDigits.empty())
+    if (numbersByPrefix.empty())
         throw Error(ErrorCode::MissingFile,
                     fmt::format("{}: no frames (no numbered {} files such as 0001{})",
                                 folder.string(), extension, extension));
-    if (shortestDigits.size() > 1) {
+    const auto shortest = [](const std::vector<std::string>& numbers) {
+        std::size_t digits = numbers.front().size();
+        for (const std::string& number : numbers) digits = std::min(digits, number.size());
+        return digits;
+    };
+    if (numbersByPrefix.size() > 1) {
         std::string names;
-        for (const auto& [prefix, digits] : shortestDigits)
+        for (const auto& [prefix, numbers] : numbersByPrefix)
             names += fmt::format("{}{}{}{}", names.empty() ? "" : ", ", prefix,
-                                 std::string(std::size_t(digits), '#'), extension);
-        throw Error(
-            ErrorCode::InvalidInput,
-            fmt::format("{}: numbered files of several names ({}): name one with a "
-                        "pattern, e.g. {}",
-                        folder.string(), names,
-                        (folder / (shortestDigits.begin()->first + "####" + std::string(extension)))
-                            .string()));
+                                 std::string(shortest(numbers), '#'), extension);
+        throw Error(ErrorCode::InvalidInput,
+                    fmt::format("{}: numbered files of several names ({}): name one with a "
+                                "pattern, e.g. {}",
+                                folder.string(), names,
+                                (folder /
+                                 (numbersByPrefix.begin()->first + "####" + std::string(extension)))
+                                    .string()));
     }
+    const auto& [prefix, numbers] = *numbersByPrefix.begin();
+    // The widths every number fits: from the widest zero-padded one to the shortest one.
+    Widths fit{1, int(shortest(numbers))};
+    for (const std::string& digits : numbers)
+        fit.narrowest = std::max(fit.narrowest, widthsOf(digits).narrowest);
+    if (fit.narrowest > fit.widest) throw severalNumberings(folder, prefix, numbers, extension);
     Pattern pattern;
-    pattern.prefix = shortestDigits.begin()->first;
-    pattern.digits = shortestDigits.begin()->second;
+    pattern.prefix = prefix;
+    pattern.digits = fit.widest;
     pattern.suffix = std::string(extension);
     return pattern;
 }
@@ -197,15 +265,27 @@ struct ViewLayer {
     std::string name;
     std::vector<std::pair<std::string, std::string>> passes;  // (pass, components)
 
-    bool has(const std::string& pass, std::string_view components) const {
+    // The components of the pass present in the file; nullopt when it has no channel of it.
+    std::optional<std::string> componentsOf(const std::string& pass) const {
         for (const auto& entry : passes)
-            if (entry.first == pass) {
-                const std::string& present = entry.second;
-                return std::all_of(components.begin(), components.end(), [&present](char c) {
-                    return present.find(c) != std::string::npos;
-                });
-            }
-        return false;
+            if (entry.first == pass) return entry.second;
+        return std::nullopt;
+    }
+    // Those of `components` the pass lacks ("" when it has them all, or has no channel of it).
+    std::string missingOf(const std::string& pass, std::string_view components) const {
+        const std::optional<std::string> present = componentsOf(pass);
+        std::string missing;
+        if (present)
+            for (char c : components)
+                if (present->find(c) == std::string::npos) missing += c;
+        return missing;
+    }
+    bool has(const std::string& pass, std::string_view components) const {
+        return componentsOf(pass) && missingOf(pass, components).empty();
+    }
+    // Some channels of the pass but not all: a damaged file, never a pass that was not enabled.
+    bool hasPartly(const std::string& pass, std::string_view components) const {
+        return componentsOf(pass) && !missingOf(pass, components).empty();
     }
     std::string passList() const {
         std::string out;
@@ -276,12 +356,53 @@ ChannelChoices channelsOf(const std::string& layer, const PassInfo& pass) {
     return choices;
 }
 
+// A pass of which the layer has some channels but not all: the channels missing, named.
+Error incompletePass(const fs::path& file, const ViewLayer& layer, const PassInfo& pass) {
+    const std::string missing = layer.missingOf(pass.name, pass.components);
+    std::string names;
+    for (std::size_t i = 0; i < missing.size(); ++i)
+        names += fmt::format("{}'{}.{}.{}'",
+                             i == 0                    ? ""
+                             : i + 1 == missing.size() ? " and "
+                                                       : ", ",
+                             layer.name, pass.name, missing[i]);
+    std::string present;
+    for (char c : layer.componentsOf(pass.name).value_or(""))
+        present += fmt::format("{}{}", present.empty() ? "" : ", ", c);
+    return Error(ErrorCode::InvalidInput,
+                 fmt::format("{}: no channel{} {} (the {} pass of view layer '{}' has only {}): "
+                             "Blender writes every channel of a pass, so the file was edited or "
+                             "damaged; render or save this frame again",
+                             file.string(), missing.size() > 1 ? "s" : "", names, pass.name,
+                             layer.name, present));
+}
+
 Error missingPass(const fs::path& file, const ViewLayer& layer, const PassInfo& pass) {
+    if (layer.hasPartly(pass.name, pass.components)) return incompletePass(file, layer, pass);
     return Error(ErrorCode::InvalidInput,
                  fmt::format("{}: no {} pass in view layer '{}' (no channel '{}.{}.{}'; it has: "
                              "{}): enable {}",
                              file.string(), pass.name, layer.name, layer.name, pass.name,
                              pass.components[0], layer.passList(), pass.howToEnable));
+}
+
+// The colour pass a layer is read with: Noisy Image when it has any of it (Combined may be
+// denoised), else Combined.
+const PassInfo& colourPassOf(const ViewLayer& layer) {
+    return layer.componentsOf(kNoisyImage.name) ? kNoisyImage : kCombined;
+}
+
+// The required passes (or, of a pass present in part, the channels) a layer lacks, e.g.
+// {"Depth", "Normal.Z"}; empty for a layer that can make frames.
+std::vector<std::string> requiredPassesLacking(const ViewLayer& layer) {
+    std::vector<std::string> lacking;
+    for (const PassInfo* pass : {&colourPassOf(layer), &kDepth, &kNormal, &kPosition}) {
+        if (!layer.componentsOf(pass->name))
+            lacking.push_back(pass == &kCombined ? "Combined (or Noisy Image)" : pass->name);
+        for (char c : layer.missingOf(pass->name, pass->components))
+            lacking.push_back(fmt::format("{}.{}", pass->name, c));
+    }
+    return lacking;
 }
 
 std::vector<ViewLayer> requireLayers(const fs::path& file, const ExrContents& contents) {
@@ -364,26 +485,39 @@ BlenderSequence::BlenderSequence(const fs::path& input, std::string viewLayer)
     const fs::path first = files_.file(0);
     const ExrContents contents = readExrContents(first);
     const std::vector<ViewLayer> layers = requireLayers(first, contents);
-    const auto hasColour = [](const ViewLayer& l) {
-        return l.has(kNoisyImage.name, kNoisyImage.components) ||
-               l.has(kCombined.name, kCombined.components);
-    };
     if (layer_.empty()) {
-        // The first layer that can make a frame; else the first one, for its error message.
-        const auto usable = std::find_if(layers.begin(), layers.end(), [&](const ViewLayer& l) {
-            return hasColour(l) && l.has(kDepth.name, kDepth.components);
+        // The first layer that can make frames. When several layers are there and none can, what
+        // each one lacks: the user enables it in the layer meant, or names that layer.
+        const auto complete = std::find_if(layers.begin(), layers.end(), [](const ViewLayer& l) {
+            return requiredPassesLacking(l).empty();
         });
-        layer_ = usable != layers.end() ? usable->name : layers.front().name;
+        if (complete == layers.end() && layers.size() > 1) {
+            std::string lacking;
+            for (const ViewLayer& l : layers) {
+                lacking += fmt::format("{}'{}' lacks ", lacking.empty() ? "" : "; ", l.name);
+                const std::vector<std::string> passes = requiredPassesLacking(l);
+                for (std::size_t i = 0; i < passes.size(); ++i)
+                    lacking += (i == 0 ? "" : ", ") + passes[i];
+            }
+            throw Error(ErrorCode::InvalidInput,
+                        fmt::format("{}: no view layer has every pass rtdenoise needs (Noisy "
+                                    "Image or Combined, Depth, Normal, Position): {}; enable them "
+                                    "in the layer to read (docs/inputs.md) and name it with "
+                                    "--view-layer NAME unless it is the first",
+                                    first.string(), lacking));
+        }
+        layer_ = complete != layers.end() ? complete->name : layers.front().name;
     }
     const ViewLayer& layer = findLayer(first, layers, layer_);
-    if (layer.has(kNoisyImage.name, kNoisyImage.components))
-        colourPass_ = kNoisyImage.name;
-    else if (layer.has(kCombined.name, kCombined.components))
-        colourPass_ = kCombined.name;
-    else
-        throw missingPass(first, layer, kCombined);
-    for (const PassInfo* pass : {&kDepth, &kNormal, &kPosition})
+    const PassInfo& colour = colourPassOf(layer);
+    for (const PassInfo* pass : {&colour, &kDepth, &kNormal, &kPosition})
         if (!layer.has(pass->name, pass->components)) throw missingPass(first, layer, *pass);
+    colourPass_ = colour.name;
+    // An optional pass present in part is a damaged file, refused as a required one is (read
+    // without it, its missing channel would pass for a pass that was never enabled).
+    for (const PassInfo* pass : {&kObjectIndex, &kAlbedo, &kVector})
+        if (layer.hasPartly(pass->name, pass->components))
+            throw incompletePass(first, layer, *pass);
     hasObjectIndex_ = layer.has(kObjectIndex.name, kObjectIndex.components);
     hasAlbedo_ = layer.has(kAlbedo.name, kAlbedo.components);
     hasMotion_ = layer.has(kVector.name, kVector.components);
@@ -449,16 +583,30 @@ void BlenderSequence::requirePasses(const fs::path& file, const ExrContents& con
     const PassInfo& colour = colourPass_ == kNoisyImage.name ? kNoisyImage : kCombined;
     for (const PassInfo* pass : {&colour, &kDepth, &kNormal, &kPosition})
         if (!layer.has(pass->name, pass->components)) throw missingPass(file, layer, *pass);
-    // An optional pass the first frame has is read from every frame: one frame without it would
-    // change what the denoiser gets in the middle of the sequence.
+    // Every frame is read with the passes of the first: a pass one frame lacks and another has,
+    // first frame included, would change what the denoiser gets in the middle of the sequence
+    // (or, dropped from every frame, degrade all of them).
+    const fs::path first = files_.file(0);
+    const auto firstLacks = [&](const PassInfo& pass) {
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("{}: no {} pass in view layer '{}', which {} has: every frame "
+                                 "needs the same passes (render every frame with it)",
+                                 first.string(), pass.name, layer_, file.string()));
+    };
+    if (&colour == &kCombined && layer.componentsOf(kNoisyImage.name))
+        throw firstLacks(kNoisyImage);
     const std::pair<bool, const PassInfo*> optional[] = {
         {hasObjectIndex_, &kObjectIndex}, {hasAlbedo_, &kAlbedo}, {hasMotion_, &kVector}};
-    for (const auto& [read, pass] : optional)
-        if (read && !layer.has(pass->name, pass->components))
+    for (const auto& [read, pass] : optional) {
+        if (layer.hasPartly(pass->name, pass->components)) throw incompletePass(file, layer, *pass);
+        const bool present = layer.has(pass->name, pass->components);
+        if (read && !present)
             throw Error(ErrorCode::InvalidInput,
                         fmt::format("{}: no {} pass in view layer '{}', which {} has: every "
-                                    "frame needs the passes of the first",
-                                    file.string(), pass->name, layer_, files_.file(0).string()));
+                                    "frame needs the same passes",
+                                    file.string(), pass->name, layer_, first.string()));
+        if (!read && present) throw firstLacks(*pass);
+    }
 }
 
 std::vector<ExrSize> BlenderSequence::checkFrames(int count) const {

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <utility>
@@ -38,14 +39,65 @@ void requireComparable(const Image& a, const Image& b, const char* what) {
     if (a.empty()) throw Error(ErrorCode::InvalidArgument, fmt::format("{}: empty images", what));
 }
 
-// Mean of term(i) for i in [0, count), summed in double across threads.
+void requireMask(const PixelMask& scored, const Image& image, const char* what) {
+    if (!scored.empty() && scored.size() != image.pixelCount())
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("{}: a mask of {} pixels for a {} image", what, scored.size(),
+                                sizeText(image)));
+}
+
+Error nothingScored(const char* what) {
+    return Error(
+        ErrorCode::InvalidInput,
+        fmt::format("{}: every pixel of the reference holds NaN/Inf: nothing to score", what));
+}
+
+// Mean of term(i) for i in [0, count), summed in double across threads; with a mask, over the
+// values of the pixels scored (`channels` values a pixel).
 template <class Term>
-double meanOverValues(std::size_t count, Term term) {
+double meanOverValues(std::size_t count, Term term, const PixelMask& scored = {}, int channels = 3,
+                      const char* what = "") {
     const auto n = static_cast<std::ptrdiff_t>(count);
     double sum = 0.0;
+    if (scored.empty()) {
 #pragma omp parallel for schedule(static) reduction(+ : sum) if (n > kParallelThreshold)
-    for (std::ptrdiff_t i = 0; i < n; ++i) sum += term(i);
-    return sum / static_cast<double>(count);
+        for (std::ptrdiff_t i = 0; i < n; ++i) sum += term(i);
+        return sum / static_cast<double>(count);
+    }
+    const std::uint8_t* mask = scored.data();
+    std::ptrdiff_t used = 0;
+#pragma omp parallel for schedule(static) reduction(+ : sum, used) if (n > kParallelThreshold)
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+        if (!mask[i / channels]) continue;
+        sum += term(i);
+        ++used;
+    }
+    if (used == 0) throw nothingScored(what);
+    return sum / static_cast<double>(used);
+}
+
+double meanSquaredError(const Image& a, const Image& b, const PixelMask& scored, const char* what) {
+    const float* x = a.pixels.data();
+    const float* r = b.pixels.data();
+    return meanOverValues(
+        a.pixels.size(),
+        [=](std::ptrdiff_t i) {
+            const double d = double(x[i]) - double(r[i]);
+            return d * d;
+        },
+        scored, a.channels, what);
+}
+
+double relativeSquaredError(const Image& result, const Image& reference, const PixelMask& scored) {
+    const float* x = result.pixels.data();
+    const float* r = reference.pixels.data();
+    return meanOverValues(
+        result.pixels.size(),
+        [=](std::ptrdiff_t i) {
+            const double d = double(x[i]) - double(r[i]);
+            return d * d / (double(r[i]) * double(r[i]) + kRelMseEpsilon);
+        },
+        scored, result.channels, "relMse");
 }
 
 // The 11-tap Gaussian (sigma 1.5), normalised to sum 1.
@@ -77,8 +129,10 @@ std::vector<double> windowNorms(int size, const std::array<double, 2 * kSsimRadi
 constexpr int kMoments = 5;
 
 // Horizontal pass of one row of one channel: moments of a and b over the restricted window.
-// out holds kMoments planes of `width` values.
-void horizontalMoments(const double* a, const double* b, int width,
+// out holds kMoments planes of `width` values. With a mask row `m` (a and b already zero where
+// it is), a sixth plane holds the window's weight over the pixels scored, and the caller divides
+// by it instead of renormalising at the borders (`norms` then all 1).
+void horizontalMoments(const double* a, const double* b, const double* m, int width,
                        const std::array<double, 2 * kSsimRadius + 1>& w,
                        const std::vector<double>& norms, double* out) {
     double* ma = out;
@@ -86,6 +140,7 @@ void horizontalMoments(const double* a, const double* b, int width,
     double* maa = out + 2 * width;
     double* mbb = out + 3 * width;
     double* mab = out + 4 * width;
+    double* mm = m ? out + kMoments * width : nullptr;
     const auto windowAt = [&](int x, int kFrom, int kTo, double norm) {
         double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
         for (int k = kFrom; k <= kTo; ++k) {
@@ -102,6 +157,11 @@ void horizontalMoments(const double* a, const double* b, int width,
         maa[x] = saa * norm;
         mbb[x] = sbb * norm;
         mab[x] = sab * norm;
+        if (m) {
+            double sm = 0;
+            for (int k = kFrom; k <= kTo; ++k) sm += w[k + kSsimRadius] * m[x + k];
+            mm[x] = sm;
+        }
     };
     for (int x = 0; x < width; ++x) {
         const bool interior = x >= kSsimRadius && x < width - kSsimRadius;
@@ -224,42 +284,61 @@ void drawLegend(Image& sheet, const ContactSheetLayout& layout, int panel,
 
 }  // namespace
 
+// ---- the pixels scored ----
+
+PixelMask finitePixels(const Image& reference) {
+    const std::size_t pixels = reference.pixelCount();
+    const auto channels = std::size_t(reference.channels);
+    const float* values = reference.pixels.data();
+    const auto finite = [&](std::size_t pixel) {
+        for (std::size_t c = 0; c < channels; ++c)
+            if (!std::isfinite(values[pixel * channels + c])) return false;
+        return true;
+    };
+    std::size_t first = 0;
+    while (first < pixels && finite(first)) ++first;
+    if (first == pixels) return {};  // the usual case: no mask, every metric as without one
+    PixelMask scored(pixels, 1);
+    for (std::size_t i = first; i < pixels; ++i) scored[i] = std::uint8_t(finite(i));
+    return scored;
+}
+
+std::size_t excludedPixels(const PixelMask& scored) {
+    return std::size_t(std::count(scored.begin(), scored.end(), std::uint8_t(0)));
+}
+
 // ---- single metrics ----
 
 double mse(const Image& result, const Image& reference) {
     requireComparable(result, reference, "mse");
-    const float* x = result.pixels.data();
-    const float* r = reference.pixels.data();
-    return meanOverValues(result.pixels.size(), [=](std::ptrdiff_t i) {
-        const double d = double(x[i]) - double(r[i]);
-        return d * d;
-    });
+    return meanSquaredError(result, reference, finitePixels(reference), "mse");
 }
 
 double relMse(const Image& result, const Image& reference) {
     requireComparable(result, reference, "relMse");
-    const float* x = result.pixels.data();
-    const float* r = reference.pixels.data();
-    return meanOverValues(result.pixels.size(), [=](std::ptrdiff_t i) {
-        const double d = double(x[i]) - double(r[i]);
-        return d * d / (double(r[i]) * double(r[i]) + kRelMseEpsilon);
-    });
+    return relativeSquaredError(result, reference, finitePixels(reference));
 }
 
-double psnr(const Image& resultDisplay, const Image& referenceDisplay) {
+double psnr(const Image& resultDisplay, const Image& referenceDisplay, const PixelMask& scored) {
     requireComparable(resultDisplay, referenceDisplay, "psnr");
-    const double m = mse(resultDisplay, referenceDisplay);
+    requireMask(scored, resultDisplay, "psnr");
+    const double m = meanSquaredError(resultDisplay, referenceDisplay, scored, "psnr");
     if (m == 0.0) return std::numeric_limits<double>::infinity();
     return 10.0 * std::log10(1.0 / m);
 }
 
-double ssim(const Image& resultDisplay, const Image& referenceDisplay) {
+double ssim(const Image& resultDisplay, const Image& referenceDisplay, const PixelMask& scored) {
     requireComparable(resultDisplay, referenceDisplay, "ssim");
+    requireMask(scored, resultDisplay, "ssim");
     const int width = resultDisplay.width;
     const int height = resultDisplay.height;
     const auto w = ssimWeights();
-    const std::vector<double> columnNorms = windowNorms(width, w);
+    const bool masked = !scored.empty();
+    // With a mask, the window's weight over the pixels scored normalises it (the border too).
+    const std::vector<double> columnNorms =
+        masked ? std::vector<double>(std::size_t(width), 1.0) : windowNorms(width, w);
     const std::vector<double> rowNorms = windowNorms(height, w);
+    const std::size_t planes = masked ? kMoments + 1 : kMoments;
 
     // Bands of rows, each with its own horizontal-pass rows (halo included): memory stays
     // O(band * width) however large the frame, at the cost of recomputing 2 * radius rows.
@@ -268,10 +347,10 @@ double ssim(const Image& resultDisplay, const Image& referenceDisplay) {
     double sum0 = 0.0, sum1 = 0.0, sum2 = 0.0;
 #pragma omp parallel if (std::ptrdiff_t(width) * height > kParallelThreshold)
     {
-        const std::size_t rowStride = std::size_t(kMoments) * width;
+        const std::size_t rowStride = planes * width;
         std::vector<double> moments(std::size_t(kBand + 2 * kSsimRadius) * rowStride);
         std::vector<double> vertical(rowStride);
-        std::vector<double> a(width), b(width);
+        std::vector<double> a(width), b(width), m(masked ? width : 0);
 #pragma omp for schedule(dynamic) reduction(+ : sum0, sum1, sum2)
         for (int band = 0; band < bands; ++band) {
             const int y0 = band * kBand;
@@ -284,8 +363,15 @@ double ssim(const Image& resultDisplay, const Image& referenceDisplay) {
                         a[x] = resultDisplay.at(x, y, c);
                         b[x] = referenceDisplay.at(x, y, c);
                     }
-                    horizontalMoments(a.data(), b.data(), width, w, columnNorms,
-                                      &moments[std::size_t(y - h0) * rowStride]);
+                    if (masked) {
+                        for (int x = 0; x < width; ++x) {
+                            m[x] = scored[std::size_t(y) * width + x];
+                            a[x] *= m[x];
+                            b[x] *= m[x];
+                        }
+                    }
+                    horizontalMoments(a.data(), b.data(), masked ? m.data() : nullptr, width, w,
+                                      columnNorms, &moments[std::size_t(y - h0) * rowStride]);
                 }
                 double channelSum = 0.0;
                 for (int y = y0; y < y1; ++y) {
@@ -297,8 +383,11 @@ double ssim(const Image& resultDisplay, const Image& referenceDisplay) {
                         const double* row = &moments[std::size_t(y + k - h0) * rowStride];
                         for (std::size_t i = 0; i < rowStride; ++i) vertical[i] += wk * row[i];
                     }
-                    const double norm = rowNorms[y];
                     for (int x = 0; x < width; ++x) {
+                        if (masked && !scored[std::size_t(y) * width + x]) continue;
+                        // A scored pixel is in its own window: its weight is never 0.
+                        const double norm =
+                            masked ? 1.0 / vertical[kMoments * width + x] : rowNorms[y];
                         channelSum += ssimValue(vertical[x] * norm, vertical[width + x] * norm,
                                                 vertical[2 * width + x] * norm,
                                                 vertical[3 * width + x] * norm,
@@ -309,45 +398,64 @@ double ssim(const Image& resultDisplay, const Image& referenceDisplay) {
             }
         }
     }
-    const double pixels = double(width) * double(height);
+    const double pixels =
+        masked ? double(scored.size() - excludedPixels(scored)) : double(width) * double(height);
+    if (pixels == 0.0) throw nothingScored("ssim");
     return (sum0 / pixels + sum1 / pixels + sum2 / pixels) / 3.0;
 }
 
 double temporalError(const Image& resultDisplay, const Image& previousResultDisplay,
-                     const Image& referenceDisplay, const Image& previousReferenceDisplay) {
+                     const Image& referenceDisplay, const Image& previousReferenceDisplay,
+                     const PixelMask& scored) {
     requireComparable(resultDisplay, referenceDisplay, "temporalError");
     requireComparable(resultDisplay, previousResultDisplay, "temporalError (previous result)");
     requireComparable(referenceDisplay, previousReferenceDisplay,
                       "temporalError (previous reference)");
+    requireMask(scored, resultDisplay, "temporalError");
     const float* x = resultDisplay.pixels.data();
     const float* xp = previousResultDisplay.pixels.data();
     const float* r = referenceDisplay.pixels.data();
     const float* rp = previousReferenceDisplay.pixels.data();
-    return meanOverValues(resultDisplay.pixels.size(), [=](std::ptrdiff_t i) {
-        return std::abs((double(x[i]) - double(xp[i])) - (double(r[i]) - double(rp[i])));
-    });
+    return meanOverValues(
+        resultDisplay.pixels.size(),
+        [=](std::ptrdiff_t i) {
+            return std::abs((double(x[i]) - double(xp[i])) - (double(r[i]) - double(rp[i])));
+        },
+        scored, resultDisplay.channels, "temporalError");
 }
 
 // ---- per frame and per sequence ----
 
 namespace {
 
-// The display-space metrics of a frame whose display images are already made.
+// The metrics of a frame whose display images are already made, over the pixels `scored` (the
+// reference's finite ones).
 FrameMetrics frameMetrics(const Image& result, const Image& reference, const Image& resultDisplay,
-                          const Image& referenceDisplay) {
+                          const Image& referenceDisplay, const PixelMask& scored) {
     FrameMetrics m;
-    m.mse = mse(result, reference);
-    m.relMse = relMse(result, reference);
-    m.psnr = psnr(resultDisplay, referenceDisplay);
-    m.ssim = ssim(resultDisplay, referenceDisplay);
+    m.mse = meanSquaredError(result, reference, scored, "mse");
+    m.relMse = relativeSquaredError(result, reference, scored);
+    m.psnr = psnr(resultDisplay, referenceDisplay, scored);
+    m.ssim = ssim(resultDisplay, referenceDisplay, scored);
+    m.excludedPixels = excludedPixels(scored);
     return m;
+}
+
+// Pixels scored in both masks (empty: all).
+PixelMask bothScored(const PixelMask& a, const PixelMask& b) {
+    if (a.empty()) return b;
+    if (b.empty()) return a;
+    PixelMask both(a.size());
+    for (std::size_t i = 0; i < a.size(); ++i) both[i] = std::uint8_t(a[i] & b[i]);
+    return both;
 }
 
 }  // namespace
 
 FrameMetrics compareFrame(const Image& result, const Image& reference, float exposure) {
     requireComparable(result, reference, "compareFrame");
-    return frameMetrics(result, reference, toneMap(result, exposure), toneMap(reference, exposure));
+    return frameMetrics(result, reference, toneMap(result, exposure), toneMap(reference, exposure),
+                        finitePixels(reference));
 }
 
 FrameMetrics meanOf(const std::vector<FrameMetrics>& frames) {
@@ -361,6 +469,7 @@ FrameMetrics meanOf(const std::vector<FrameMetrics>& frames) {
         mean.relMse += f.relMse;
         mean.psnr += f.psnr;
         mean.ssim += f.ssim;
+        mean.excludedPixels += f.excludedPixels;
         if (f.temporalError) {
             temporalSum += *f.temporalError;
             ++temporalCount;
@@ -387,12 +496,14 @@ const FrameMetrics& SequenceComparer::addFrame(const Image& result, const Image&
                                 sizeText(previousResult_)));
     Image resultDisplay = toneMap(result, exposure_);
     Image referenceDisplay = toneMap(reference, exposure_);
-    FrameMetrics m = frameMetrics(result, reference, resultDisplay, referenceDisplay);
+    PixelMask scored = finitePixels(reference);
+    FrameMetrics m = frameMetrics(result, reference, resultDisplay, referenceDisplay, scored);
     if (!frames_.empty())
-        m.temporalError =
-            temporalError(resultDisplay, previousResult_, referenceDisplay, previousReference_);
+        m.temporalError = temporalError(resultDisplay, previousResult_, referenceDisplay,
+                                        previousReference_, bothScored(scored, previousScored_));
     previousResult_ = std::move(resultDisplay);
     previousReference_ = std::move(referenceDisplay);
+    previousScored_ = std::move(scored);
     frames_.push_back(m);
     return frames_.back();
 }

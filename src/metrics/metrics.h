@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -23,28 +24,49 @@ inline constexpr int kSsimRadius = 5;           // 11x11 window
 inline constexpr double kSsimSigma = 1.5;       // Gaussian window sigma, pixels
 inline constexpr double kRelMseEpsilon = 0.01;  // relMSE denominator: r^2 + 0.01
 
-// ---- single metrics ----
+// ---- the pixels scored ----
 
-// Mean over pixels and channels of (x - r)^2, linear values. NaN in x propagates (a broken result
-// must not look good).
+// A reference pixel with a NaN or Inf in any channel has no right answer to score a result
+// against: every metric leaves it out, as if the image had no such pixel (the means are over the
+// other pixels; SSIM's windows skip it). A mask holds 1 per scored pixel; empty: every pixel.
+using PixelMask = std::vector<std::uint8_t>;
+
+// The pixels of `reference` with every channel finite; empty when all of them are.
+PixelMask finitePixels(const Image& reference);
+
+// The pixels a mask leaves out (0 for an empty mask).
+std::size_t excludedPixels(const PixelMask& scored);
+
+// ---- single metrics ----
+// A reference with no finite pixel, or a mask scoring none, leaves nothing to score: InvalidInput.
+
+// Mean over pixels and channels of (x - r)^2, linear values, over the reference's finite pixels.
+// NaN in x propagates (a broken result must not look good).
 double mse(const Image& result, const Image& reference);
 
-// Mean over pixels and channels of (x - r)^2 / (r^2 + 0.01) (pbrt's relative MSE), linear values.
+// Mean over pixels and channels of (x - r)^2 / (r^2 + 0.01) (pbrt's relative MSE), linear values,
+// over the reference's finite pixels.
 double relMse(const Image& result, const Image& reference);
 
-// 10 log10(1 / MSE) in dB of two display images; +infinity when they are identical.
-double psnr(const Image& resultDisplay, const Image& referenceDisplay);
+// 10 log10(1 / MSE) in dB of two display images (over the pixels `scored`); +infinity when they
+// are identical there.
+double psnr(const Image& resultDisplay, const Image& referenceDisplay,
+            const PixelMask& scored = {});
 
 // Mean SSIM of two display images: the SSIM map of each of R, G, B with an 11x11 Gaussian window
 // (sigma 1.5), averaged over pixels and then over the three channels. At the borders the window
 // is restricted to the pixels inside the image and its weights renormalised, so every pixel
-// counts and images smaller than the window work.
-double ssim(const Image& resultDisplay, const Image& referenceDisplay);
+// counts and images smaller than the window work. With a mask, likewise: windows and the mean
+// are restricted to the pixels scored.
+double ssim(const Image& resultDisplay, const Image& referenceDisplay,
+            const PixelMask& scored = {});
 
-// Mean over pixels and channels of |(x_t - x_{t-1}) - (r_t - r_{t-1})| on display images: zero
-// when the result changes exactly as the reference does; flicker and lag both raise it.
+// Mean over pixels and channels of |(x_t - x_{t-1}) - (r_t - r_{t-1})| on display images (over
+// the pixels `scored`): zero when the result changes exactly as the reference does; flicker and
+// lag both raise it.
 double temporalError(const Image& resultDisplay, const Image& previousResultDisplay,
-                     const Image& referenceDisplay, const Image& previousReferenceDisplay);
+                     const Image& referenceDisplay, const Image& previousReferenceDisplay,
+                     const PixelMask& scored = {});
 
 // ---- per frame and per sequence ----
 
@@ -54,14 +76,16 @@ struct FrameMetrics {
     double psnr = 0.0;  // dB; +infinity for identical display images
     double ssim = 1.0;
     std::optional<double> temporalError;  // absent for frame 0 (no previous frame)
+    std::size_t excludedPixels = 0;       // reference pixels with NaN/Inf, left out of all above
 };
 
-// MSE and relMSE of the linear images; PSNR and SSIM of toneMap(., exposure). No temporal error.
+// MSE and relMSE of the linear images; PSNR and SSIM of toneMap(., exposure), all over the
+// reference's finite pixels. No temporal error.
 FrameMetrics compareFrame(const Image& result, const Image& reference, float exposure = 1.0f);
 
 // Means over frames. The temporal error's mean is over the frames that have one (1..N-1), absent
 // when none does. PSNR is the mean of the per-frame dB values, so one identical frame makes the
-// mean infinite.
+// mean infinite. excludedPixels: the frames' sum.
 FrameMetrics meanOf(const std::vector<FrameMetrics>& frames);
 
 struct SequenceMetrics {
@@ -75,7 +99,8 @@ class SequenceComparer {
   public:
     explicit SequenceComparer(float exposure = 1.0f);
 
-    // Metrics of the next frame (temporal error against the frame added before it).
+    // Metrics of the next frame (temporal error against the frame added before it, over the
+    // pixels finite in both frames' references).
     const FrameMetrics& addFrame(const Image& result, const Image& reference);
 
     const std::vector<FrameMetrics>& frames() const { return frames_; }
@@ -86,6 +111,7 @@ class SequenceComparer {
     std::vector<FrameMetrics> frames_;
     Image previousResult_;  // display images of the previous frame
     Image previousReference_;
+    PixelMask previousScored_;  // the previous reference's finite pixels
 };
 
 // All frames at once; `results` and `references` must have the same length.

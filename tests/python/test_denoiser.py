@@ -1,10 +1,12 @@
 """rtdenoise.Denoiser: known answers, the command line's results, layouts, history, errors."""
 
+import warnings
+
 import numpy as np
 import pytest
 
 import rtdenoise
-from conftest import BLENDER_FIXTURE, max_relative_difference, rel_mse
+from conftest import BLENDER_FIXTURE, Plane, max_relative_difference, rel_mse
 
 METHODS = ["jbf", "atrous", "temporal", "svgf", "detail"]
 
@@ -196,6 +198,40 @@ def test_float16_inputs_give_nearly_the_float32_result(frames, reference_results
         assert rel_mse(got, expected) < 1e-3
 
 
+def float64_with(value32, value64, name="color", method="jbf"):
+    """The results of the plane's frame with pixel (10, 20)'s `name` set to value32 in float32
+    and to value64 in float64 (the rest alike): the same when the float64 value is read as the
+    float32 one."""
+    plane = Plane()
+    rng = np.random.default_rng(6)
+    base = dict(color=rng.uniform(0.2, 1, plane.depth.shape + (3,)))
+    if name != "color":
+        base[name] = np.full(plane.depth.shape + (3,), 0.5)
+    if name == "specular":
+        base["roughness"] = np.full(plane.depth.shape, 0.1, np.float32)
+    results = []
+    for value, dtype in ((value32, np.float32), (value64, np.float64)):
+        inputs = dict(plane.inputs(None), **{k: v.astype(dtype) for k, v in base.items()})
+        inputs[name][10, 20] = value
+        results.append(rtdenoise.Denoiser(method, device="cpu").denoise(**inputs))
+    return results
+
+
+@pytest.mark.parametrize(
+    "name, method", [("color", "jbf"), ("color", "svgf"), ("albedo", "jbf"), ("specular", "detail")]
+)
+def test_float64_radiance_beyond_float32s_range_is_clamped_as_documented(name, method):
+    """1e300 is beyond float32: cast, it would be Inf, replaced by 0 (a black pixel); the
+    library's clamp to +-1e16 (kMaxRadiance) applies instead, as to a float32 1e16."""
+    clamped, wide = float64_with([1e16, 0.5, -1e16], [1e300, 0.5, -1e300], name, method)
+    assert np.all(np.isfinite(wide))
+    np.testing.assert_array_equal(wide, clamped)
+    # NaN and Inf stay non-finite through the cast: replaced by 0 as in float32.
+    non_finite = [np.nan, np.inf, -np.inf]
+    replaced, wide = float64_with(non_finite, non_finite, name, method)
+    np.testing.assert_array_equal(wide, replaced)
+
+
 def test_out_arrays_are_written_in_place(frames, reference_results):
     frame = frames[0]
     den = rtdenoise.Denoiser(device="cpu")
@@ -325,6 +361,24 @@ def test_single_frame_methods_need_no_matrices(plane):
     np.testing.assert_array_equal(without, with_matrices)
 
 
+def test_object_count_bounds_the_ids_after_frames_with_matrices(plane):
+    """A single-frame method given matrices on one frame and none on the next: the next frame's
+    object count bounds its IDs, not the earlier matrices' count (1)."""
+    color = np.random.default_rng(8).uniform(0, 1, plane.depth.shape + (3,)).astype(np.float32)
+    inputs = plane.inputs(color)
+    den = rtdenoise.Denoiser("jbf", device="cpu")
+    den.denoise(**inputs)
+    del inputs["matrices"]
+    inputs["ids"] = np.where(np.arange(plane.width) < 32, 0, 3).astype(np.int32)[None].repeat(
+        plane.height, 0
+    )
+    expected = rtdenoise.Denoiser("jbf", device="cpu").denoise(**inputs)
+    np.testing.assert_array_equal(den.denoise(**inputs), expected)
+    np.testing.assert_array_equal(den.denoise(**inputs, object_count=4), expected)
+    error = error_of(den.denoise, **inputs, object_count=3)
+    assert error.code == rtdenoise.ErrorCode.INVALID_INPUT and "3" in str(error)
+
+
 def test_ids_default_to_one_object_with_background_where_the_normal_is_zero(plane):
     color = np.random.default_rng(3).uniform(0, 1, plane.depth.shape + (3,)).astype(np.float32)
     plane.normal[:10] = 0
@@ -338,6 +392,28 @@ def test_ids_default_to_one_object_with_background_where_the_normal_is_zero(plan
     np.testing.assert_array_equal(got, expected)
     np.testing.assert_array_equal(got[:10], color[:10])  # background passes through
 
+
+
+@pytest.mark.parametrize("broken", ["ids", "depth", "normal"])
+def test_a_frame_without_usable_geometry_is_warned_of(plane, broken):
+    """Every ID -1, a depth of NaN, or zero normals everywhere: the frame comes back (nearly) as
+    noisy as it went in, so a RuntimeWarning names what broke; a normal frame warns of nothing."""
+    color = np.random.default_rng(5).uniform(0, 1, plane.depth.shape + (3,)).astype(np.float32)
+    inputs = plane.inputs(color)
+    den = rtdenoise.Denoiser("svgf", device="cpu")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        den.denoise(**inputs)
+    expected = {"ids": "background", "depth": "NaN or Inf depth", "normal": "zero or non-finite normal"}
+    if broken == "ids":
+        inputs["ids"] = np.full_like(plane.ids, -1)
+    elif broken == "depth":
+        inputs["depth"] = np.full_like(plane.depth, np.nan)
+        del inputs["position"]
+    else:
+        inputs["normal"] = np.zeros_like(plane.normal)
+    with pytest.warns(RuntimeWarning, match=expected[broken]):
+        den.denoise(**inputs)
 
 # ---- settings ----
 
@@ -436,6 +512,40 @@ def test_ids_out_of_range_are_refused_and_keep_the_history(plane):
     np.testing.assert_array_equal(den.denoise(**plane.inputs(color)), expected)
 
 
+@pytest.mark.parametrize("motion", [False, True])
+def test_an_object_count_beyond_int32_is_an_invalid_argument(plane, motion):
+    inputs = plane.inputs(np.zeros(plane.depth.shape + (3,), np.float32))
+    del inputs["matrices"]
+    if motion:
+        inputs["motion"] = np.zeros(plane.depth.shape + (2,), np.float32)
+    den = rtdenoise.Denoiser("svgf" if motion else "jbf", device="cpu")
+    for count in (2**40, 2**31, -1):
+        error = error_of(den.denoise, **inputs, object_count=count)
+        assert isinstance(error, rtdenoise.InvalidArgumentError)
+        assert str(error) == f"object_count: {count} is out of range 0..2147483647"
+    assert "object_count" in str(error_of(den.denoise, **inputs, object_count=2.5))
+    # An ID no object count can bound: named as such, not a TypeError.
+    ids = np.zeros(plane.depth.shape, np.int64)
+    ids[3, 4] = 2**31 - 1
+    error = error_of(den.denoise, **dict(inputs, ids=ids))
+    assert error.code == rtdenoise.ErrorCode.INVALID_INPUT and "2147483647" in str(error)
+    assert np.all(np.isfinite(den.denoise(**inputs, object_count=1)))  # still usable
+
+
+def test_copying_or_pickling_a_denoiser_is_refused(plane):
+    """A copy would share the native denoiser, and with it one history, with the original: two
+    sequences through the two would mix."""
+    import copy
+    import pickle
+
+    den = rtdenoise.Denoiser("svgf", device="cpu")
+    for refused in (copy.copy, copy.deepcopy, pickle.dumps):
+        error = error_of(refused, den)
+        assert error.code == rtdenoise.ErrorCode.INVALID_OPERATION
+        assert "cannot be copied" in str(error), refused
+    assert np.all(np.isfinite(den.denoise(**plane.inputs(np.ones(plane.depth.shape + (3,))))))
+
+
 def test_bad_device_and_method_names():
     error = error_of(rtdenoise.Denoiser, "svgf", device="gpu")
     assert "'gpu'" in str(error) and isinstance(error, ValueError)
@@ -478,3 +588,87 @@ def test_one_denoiser_is_refused_to_a_second_thread_and_after_close(frames):
     with den:
         den.denoise_frame(frames[0])
     assert "closed" in str(error_of(den.denoise_frame, frames[0]))
+
+
+def test_close_during_a_denoise_in_another_thread_waits_for_its_frame():
+    """close() from another thread while denoise() runs: the frame in flight completes, the
+    calls after it raise the closed error; never an AttributeError."""
+    import threading
+
+    plane = Plane(256, 256)
+    inputs = plane.inputs(np.random.default_rng(7).uniform(0, 1, (256, 256, 3)).astype(np.float32))
+    den = rtdenoise.Denoiser("atrous", device="cpu")
+    results, failures = [], []
+
+    def run():
+        try:
+            for _ in range(1000):
+                results.append(den.denoise(**inputs))
+        except Exception as error:  # noqa: BLE001 (the test reports what it was)
+            failures.append(error)
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    while not den._lock.locked() and worker.is_alive():
+        pass  # until a call is under way (it holds the lock through the filtering)
+    den.close()
+    worker.join(30)
+    assert len(failures) == 1, failures
+    assert isinstance(failures[0], rtdenoise.Error), repr(failures[0])
+    assert failures[0].code == rtdenoise.ErrorCode.INVALID_OPERATION
+    assert "closed" in str(failures[0])
+    assert results and all(np.all(np.isfinite(r)) for r in results)
+    assert repr(den) == "<rtdenoise.Denoiser atrous on closed>"
+
+
+def test_close_inside_a_call_of_the_same_thread_is_refused_not_a_deadlock():
+    den = rtdenoise.Denoiser("jbf", device="cpu")
+    with den._exclusive():  # as inside a denoise() of this thread
+        error = error_of(den.close)
+    assert error.code == rtdenoise.ErrorCode.INVALID_OPERATION and "close" in str(error)
+    den.close()
+
+
+# ---- cost ----
+
+
+def test_a_large_object_id_costs_no_memory_per_object():
+    """Without matrices, one ID of 5,000,000 (the object count 5,000,001) must not build or copy
+    5,000,001 identity matrices (320 MB each time) where the method reads none: a single-frame
+    method, or motion vectors. Peak RSS in a fresh interpreter, so that no earlier test's peak
+    hides the growth."""
+    import os
+    import subprocess
+    import sys
+
+    script = """
+import resource, sys
+import numpy as np
+import rtdenoise
+sys.path.insert(0, sys.argv[1])
+from conftest import Plane
+plane = Plane()
+inputs = plane.inputs(np.full(plane.depth.shape + (3,), 0.5, np.float32))
+del inputs["matrices"]
+motion = dict(motion=np.zeros(plane.depth.shape + (2,), np.float32))
+runs = [("jbf", {}), ("atrous", {}), ("svgf", motion), ("detail", motion)]
+for method, extra in runs:  # the first frame allocates the method's buffers
+    rtdenoise.Denoiser(method, device="cpu").denoise(**inputs, **extra)
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+large = plane.ids.copy()
+large[0, 0] = 5_000_000
+for method, extra in runs:
+    den = rtdenoise.Denoiser(method, device="cpu")
+    for _ in range(2):
+        den.denoise(**dict(inputs, ids=large), **extra)
+    den.denoise(**inputs, **extra, object_count=5_000_001)
+print((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024)
+"""
+    env = dict(os.environ, PYTHONPATH=os.path.dirname(os.path.dirname(rtdenoise.__file__)))
+    completed = subprocess.run(
+        [sys.executable, "-c", script, os.path.dirname(__file__)],
+        capture_output=True, text=True, timeout=120, env=env,
+    )
+    assert completed.returncode == 0, completed.stderr
+    growth_mb = float(completed.stdout)
+    assert growth_mb < 64, f"peak RSS grew by {growth_mb:.0f} MB"
