@@ -262,6 +262,8 @@ struct Denoiser::Impl {
         const bool sameHistoryMeaning = next.albedo.demodulate == settings.albedo.demodulate;
         const bool kept = sameHistoryMeaning && layout().width > 0 &&
                           nextPipeline.adoptImages(pipeline);
+        // The old images are freed below: frames queued on a GPU stream may still use them.
+        if (!kept) device->synchronize();
         settings = next;
         pipeline = std::move(nextPipeline);
         images = nextImages;

@@ -457,7 +457,8 @@ class Denoiser:
     def set(self, name: str, value: Any) -> None:
         """Sets one setting: name with underscores or hyphens ("sigma_color", "sigma-color");
         a bool, int, float or str value (motion_scale: an (x, y) pair). Changing a setting
-        after the first frame starts a new history."""
+        after the first frame takes effect at the next one, over the history kept, unless it changes
+        the method's passes (method, an iteration count, a radius, outlier, albedo)."""
         key = _setting_name(name)
         with self._exclusive():
             if key == "motion-scale":

@@ -267,6 +267,21 @@ def test_history_is_kept_across_calls_and_reset_forgets_it(frames, method):
     np.testing.assert_array_equal(den.denoise_frame(frame), first)
 
 
+
+def test_setting_a_value_again_before_every_frame_keeps_the_history(frames, reference_results):
+    """An engine that sets its parameters before every frame still gets temporal filtering: the
+    results are the plain run's; a new sigma takes effect over the kept history."""
+    den = rtdenoise.Denoiser(device="cpu")
+    for frame, expected in zip(frames, reference_results):
+        den.set("sigma_color", 0.6)
+        den.set("detail_sigma_luminance", den.get("detail_sigma_luminance"))
+        np.testing.assert_array_equal(den.denoise_frame(frame), expected)
+    changed = den.denoise_frame(frames[0])
+    den.set("detail_sigma_luminance", 1.0)
+    after = den.denoise_frame(frames[1])
+    fresh = rtdenoise.Denoiser(device="cpu", detail_sigma_luminance=1.0).denoise_frame(frames[1])
+    assert not np.array_equal(after, fresh) and not np.array_equal(after, changed)
+
 def test_zero_confidence_drops_the_detail_methods_history(frames):
     den = rtdenoise.Denoiser("detail", device="cpu")
     den.denoise_frame(frames[0])
