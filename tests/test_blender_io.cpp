@@ -774,6 +774,30 @@ TEST_F(BlenderBroken, AFrameOfAnotherSizeIsWarnedAboutAndSummarisedTruthfully) {
     EXPECT_FALSE(contains(same.output, "history restarts")) << same.output;
 }
 
+// A Depth pass of NaN (a broken pass, not Cycles' miss value) or a Normal pass of zeros leaves
+// the frame as noisy as it came: the run succeeds, but names the file and the pass at that frame.
+TEST_F(BlenderBroken, AFrameWithoutUsableGeometryIsNamedWithItsPass) {
+    const fs::path in = dir.path() / "in";
+    copyFixture(in, [](int index, std::map<std::string, Image>& channels) {
+        for (auto& [name, image] : channels) {
+            if (index == 1 && passOf(name) == "Depth")
+                for (float& v : image.pixels) v = std::nanf("");
+            if (index == 2 && passOf(name) == "Normal")
+                for (float& v : image.pixels) v = 0.0f;
+        }
+    });
+    const test::CliResult r =
+        runCli("denoise " + quoted(in) + " --method svgf -o " + quoted(dir.path() / "out"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, (in / "0002.exr").string() + ": ")) << r.output;
+    EXPECT_TRUE(contains(r.output, "NaN or Inf depth or position")) << r.output;
+    EXPECT_TRUE(contains(r.output, "(frame 1; is the depth pass broken?)")) << r.output;
+    EXPECT_TRUE(contains(r.output, (in / "0003.exr").string() + ": ")) << r.output;
+    EXPECT_TRUE(contains(r.output, "(frame 2; is the normal pass broken?)")) << r.output;
+    EXPECT_FALSE(contains(r.output, "frame 0;")) << r.output;
+    EXPECT_FALSE(contains(r.output, "frame 3;")) << r.output;
+}
+
 TEST_F(BlenderBroken, AGapInTheNumberingNamesTheMissingFile) {
     copyFixture(dir.path() / "in", {}, 7);  // 0007..0010
     EXPECT_EQ(BlenderSequence(dir.path() / "in").files().first, 7);

@@ -648,7 +648,9 @@ Frame BlenderSequence::readFrame(int index) const {
     int largestId = -1;
     for (std::size_t i = 0; i < frame.beauty.pixelCount(); ++i) {
         float& depth = frame.depth.pixels[i];
-        if (!(depth < kBackgroundDepth)) {  // Cycles' miss value, or not a number
+        // Cycles' miss value. A NaN is no miss but a broken pass: it goes to the denoiser, which
+        // reads the pixel as background too, and counts and reports it (FrameStats).
+        if (depth >= kBackgroundDepth) {
             depth = 0.0f;
             for (int c = 0; c < 3; ++c) {
                 frame.normal.pixels[i * 3 + c] = 0.0f;
