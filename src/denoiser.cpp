@@ -125,17 +125,19 @@ InputLayout inputLayout(const char* name, const ImageView& v, int width, int hei
                                 ownChannels, maxChannels));
     const std::size_t pixelBytes = std::size_t(view.channels) * valueBytes(view.type);
     if (view.pixelStride == 0) view.pixelStride = pixelBytes;
-    const std::optional<std::size_t> packedRow = checkedProduct(std::size_t(width), view.pixelStride);
+    const std::optional<std::size_t> packedRow =
+        checkedProduct(std::size_t(width), view.pixelStride);
     if (view.rowStride == 0 && packedRow) view.rowStride = *packedRow;
     const std::optional<std::size_t> span =
         packedRow ? imageSpanBytes(std::size_t(width), std::size_t(height), view.pixelStride,
                                    view.rowStride, pixelBytes)
                   : std::nullopt;
     if (!span || !fitsAddressSpace(view.data, *span))
-        throw Error(ErrorCode::InvalidArgument,
-                    fmt::format("frame: {}: strides of {} bytes per pixel and {} per row over {}x{} "
-                                "pixels reach past the end of memory",
-                                name, view.pixelStride, view.rowStride, width, height));
+        throw Error(
+            ErrorCode::InvalidArgument,
+            fmt::format("frame: {}: strides of {} bytes per pixel and {} per row over {}x{} "
+                        "pixels reach past the end of memory",
+                        name, view.pixelStride, view.rowStride, width, height));
     // Within the span just checked: no product below overflows.
     if (view.pixelStride < pixelBytes ||
         view.rowStride < (width - 1) * view.pixelStride + pixelBytes)
@@ -260,8 +262,8 @@ struct Denoiser::Impl {
         FrameImages nextImages = declareMethod(nextPipeline, next, declaredInputs);
         // Demodulation changes what the history holds (illumination or radiance).
         const bool sameHistoryMeaning = next.albedo.demodulate == settings.albedo.demodulate;
-        const bool kept = sameHistoryMeaning && layout().width > 0 &&
-                          nextPipeline.adoptImages(pipeline);
+        const bool kept =
+            sameHistoryMeaning && layout().width > 0 && nextPipeline.adoptImages(pipeline);
         // The old images are freed below: frames queued on a GPU stream may still use them.
         if (!kept) device->synchronize();
         settings = next;
@@ -534,6 +536,7 @@ struct Denoiser::Impl {
         stats.uploadMilliseconds = stats.downloadMilliseconds = 0.0;
         Device::InputFlagCounts flags = device->takeQueuedInputFlags();
         noteFlags(flags);
+        stats.pixels = (long long)pixels() * frames;  // the flags are those frames' sums
         if (flags.badObjectIds > 0) {
             hasHistory = false;  // a frame with IDs read as background became history
             throw Error(ErrorCode::InvalidInput,
@@ -668,17 +671,20 @@ std::string inputWarning(const FrameStats& s) {
     const double pixels = double(s.pixels);
     const auto percent = [&](long long count) { return 100.0 * double(count) / pixels; };
     if (double(s.nonFiniteGeometry) > kMostOfTheFrame * pixels)
-        return fmt::format("{:.0f} % of the pixels have a NaN or Inf depth or position: read as "
-                           "background, they pass through undenoised",
-                           percent(s.nonFiniteGeometry));
+        return fmt::format(
+            "{:.0f} % of the pixels have a NaN or Inf depth or position: read as "
+            "background, they pass through undenoised",
+            percent(s.nonFiniteGeometry));
     if (double(s.missingNormals) > kMostOfTheFrame * pixels)
-        return fmt::format("{:.0f} % of the pixels have a zero or non-finite normal: filtered "
-                           "without their normal terms",
-                           percent(s.missingNormals));
+        return fmt::format(
+            "{:.0f} % of the pixels have a zero or non-finite normal: filtered "
+            "without their normal terms",
+            percent(s.missingNormals));
     if (double(s.backgroundPixels) >= kAllOfTheFrame * pixels)
-        return fmt::format("{:.0f} % of the pixels are background (object ID -1 or out of range): "
-                           "they pass through undenoised",
-                           percent(s.backgroundPixels));
+        return fmt::format(
+            "{:.0f} % of the pixels are background (object ID -1 or out of range): "
+            "they pass through undenoised",
+            percent(s.backgroundPixels));
     return {};
 }
 

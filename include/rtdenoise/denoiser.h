@@ -36,7 +36,7 @@ struct FrameStats {
                                         // as background
     long long backgroundPixels = 0;     // pixels passed through unfiltered: ID -1, an ID out of
                                         // range, or nonFiniteGeometry
-    long long pixels = 0;               // the frame's
+    long long pixels = 0;  // the frame's (after synchronize(): the queued frames', as the counts)
 };
 
 // What looked broken in the frame these statistics are of, though it was denoised (empty where
