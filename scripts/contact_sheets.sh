@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's contact sheets of the hard cases: per scene one row, input / svgf / detail /
+# The contact sheets of the hard cases (docs/results.md): per scene one row, input / svgf / detail /
 # reference, on the frame that shows the case (thin-geometry frame 7: thin shadows; reflections
 # frame 7: reflections under camera motion; switching-light frame 6: the light just switched
 # off). Writes docs/images/hard_cases.png (and one PNG per scene). The renders carry the split

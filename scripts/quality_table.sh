@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's quality table: renders each built-in test scene with a converged reference,
+# The quality table (docs/results.md): renders each built-in test scene with a converged reference,
 # denoises it with every method (defaults), and prints scene x method: relMSE, PSNR, SSIM and
 # temporal error (means over the frames) as a Markdown table.
 #   scripts/quality_table.sh [WIDTH HEIGHT FRAMES REF_SPP]   (default 128 128 8 256)

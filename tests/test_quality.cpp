@@ -88,7 +88,7 @@ TEST_F(Quality, TemporalBeatsSingleFrameAtrousWithAStaticCamera) {
               0.95 * *run.scores["atrous"].mean.temporalError);
     // ...but on relMSE only with a wider clamp: the assignment's k = 1 window of the filtered
     // frame is narrower than that frame's own fluctuation, so the clamped history is biased
-    // (measured relMSE 0.161 with k = 1, 0.066 with k = 3, atrous 0.104: a finding, README).
+    // (measured relMSE 0.161 with k = 1, 0.066 with k = 3, atrous 0.104: a finding, docs/results.md).
     EXPECT_LT(run.scores["temporal-k3"].mean.relMse, 0.8 * run.scores["atrous"].mean.relMse);
 }
 
