@@ -1,8 +1,8 @@
 // Google Benchmark: ms per frame through the C API (librtdenoise_c) on the course scene (box,
 // 512x512, beside the repository), the default method in its steady state, as an engine drives
 // it: plainly; setting a parameter to the value it has before every frame (the history must be
-// kept, and nothing rebuilt); and with motion vectors and 4 million object IDs allowed (the cost
-// must not grow with the count). Only the C API is used, so the file builds against any version.
+// kept, and nothing rebuilt); with motion vectors and the scene's object count, and with 4
+// million object IDs allowed (the cost must not grow with the count). Only the C API is used, so the file builds against any version.
 //   build/release/bench/bench_c_api --benchmark_repetitions=5 --benchmark_report_aggregates_only
 #include <benchmark/benchmark.h>
 
@@ -34,7 +34,7 @@ std::vector<float> flat(const rtd::Matrix4& m) {
     return values;
 }
 
-enum class Drive { Plain, SettingEveryFrame, MotionManyObjects };
+enum class Drive { Plain, SettingEveryFrame, Motion, MotionManyObjects };
 
 void runCApi(benchmark::State& state, Drive drive) {
     if (frames().empty()) {
@@ -54,9 +54,9 @@ void runCApi(benchmark::State& state, Drive drive) {
         rtdSetImage(d, "depth", f.depth.pixels.data(), RTD_FORMAT_FLOAT, w, h, 0, 0);
         rtdSetImage(d, "ids", f.objectId.data(), RTD_FORMAT_INT, w, h, 0, 0);
         rtdSetImage(d, "output", output.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
-        if (drive == Drive::MotionManyObjects) {
+        if (drive == Drive::Motion || drive == Drive::MotionManyObjects) {
             rtdSetImage(d, "motion", motion.data(), RTD_FORMAT_FLOAT2, w, h, 0, 0);
-            rtdSetObjectCount(d, 4000000);
+            rtdSetObjectCount(d, drive == Drive::Motion ? int(f.objectToWorld.size()) : 4000000);
         } else {
             std::vector<float> objects;
             for (const rtd::Matrix4& m : f.objectToWorld) {
@@ -86,12 +86,16 @@ void BM_CApiDetail(benchmark::State& s) {
 void BM_CApiDetailSettingEveryFrame(benchmark::State& s) {
     runCApi(s, Drive::SettingEveryFrame);
 }
+void BM_CApiDetailMotion(benchmark::State& s) {
+    runCApi(s, Drive::Motion);
+}
 void BM_CApiDetailMotionManyObjects(benchmark::State& s) {
     runCApi(s, Drive::MotionManyObjects);
 }
 
 BENCHMARK(BM_CApiDetail)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_CApiDetailSettingEveryFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CApiDetailMotion)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_CApiDetailMotionManyObjects)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
