@@ -1,5 +1,6 @@
-// `rtdenoise render SCENE -o OUT_DIR`: renders a built-in test scene into a sequence folder with
-// its G-buffers and a converged reference (`rtdenoise render --list` names the scenes).
+// `rtdenoise render SCENE -o OUT_DIR`: renders a built-in test scene, or with SCENE "random" the
+// scene generator's scene of --seed, into a sequence folder with its G-buffers and a converged
+// reference (`rtdenoise render --list` names the scenes; `--describe` prints what a seed draws).
 #include <fmt/format.h>
 
 #include <chrono>
@@ -8,6 +9,7 @@
 
 #include "commands.h"
 #include "progress.h"
+#include "render/random_scene.h"
 #include "render/render_sequence.h"
 #include "rtdenoise/error.h"
 
@@ -20,6 +22,7 @@ struct RenderOptions {
     std::string scene;
     fs::path output;
     bool list = false;
+    bool describe = false;
     bool quiet = false;
     render::RenderSettings settings;
 };
@@ -28,7 +31,29 @@ std::string sceneList() {
     std::string out;
     for (const render::SceneInfo& s : render::listScenes())
         out += fmt::format("  {:<16} {}\n", s.name, s.description);
+    out += fmt::format("  {:<16} {}\n", render::kRandomSceneName,
+                       "a generated scene, a different one for each --seed (rooms and open scenes, "
+                       "every kind of light, material and motion; docs/scene_generator.md)");
     return out;
+}
+
+// What SCENE is and draws, as JSON: the generator's parameters for "random", the name,
+// description and motion of a built-in scene.
+std::string describeScene(const RenderOptions& options) {
+    if (options.scene == render::kRandomSceneName) {
+        render::RandomSceneRecipe recipe = render::drawRandomScene(options.settings.seed);
+        render::normaliseExposure(recipe);
+        return fmt::format(
+            "{{\n  \"scene\": \"{}\",\n  \"description\": \"{}\",\n  "
+            "\"generator\": {}\n}}\n",
+            render::kRandomSceneName, recipe.summary(), recipe.describeJson());
+    }
+    for (const render::SceneInfo& info : render::listScenes())
+        if (info.name == options.scene)
+            return fmt::format("{{\n  \"scene\": \"{}\",\n  \"description\": \"{}\"\n}}\n",
+                               info.name, info.description);
+    throw Error(ErrorCode::InvalidArgument,
+                fmt::format("unknown scene '{}'; scenes:\n{}", options.scene, sceneList()));
 }
 
 int runRender(const RenderOptions& options) {
@@ -39,11 +64,15 @@ int runRender(const RenderOptions& options) {
     if (options.scene.empty())
         throw Error(ErrorCode::InvalidArgument,
                     "render: name a SCENE (or use --list); scenes:\n" + sceneList());
+    if (options.describe) {
+        fmt::print("{}", describeScene(options));
+        return 0;
+    }
     if (options.output.empty())
         throw Error(ErrorCode::InvalidArgument, "render: -o OUT_DIR is required");
 
     const render::RenderSettings& s = options.settings;
-    bool known = false;
+    bool known = options.scene == render::kRandomSceneName;
     for (const render::SceneInfo& info : render::listScenes())
         known = known || info.name == options.scene;
     if (!known)
@@ -52,7 +81,10 @@ int runRender(const RenderOptions& options) {
     if (!options.quiet)
         fmt::print(
             stderr, "rtdenoise: rendering {} into {}: {} frames of {}x{}, {} spp{}\n",
-            options.scene, options.output.string(), s.frames, s.width, s.height, s.spp,
+            options.scene == render::kRandomSceneName
+                ? fmt::format("{} (seed {})", options.scene, s.seed)
+                : options.scene,
+            options.output.string(), s.frames, s.width, s.height, s.spp,
             s.gbufferOnly ? ", no reference" : fmt::format(", reference {} spp", s.referenceSpp));
 
     Progress progress(s.frames, options.quiet);
@@ -84,12 +116,15 @@ Command addRenderCommand(CLI::App& app) {
     render::RenderSettings& s = options->settings;
     CLI::App* c = app.add_subcommand(
         "render",
-        "Render a built-in test scene into OUT_DIR: beauty_i.exr (noisy), albedo, "
-        "normal, position, depth, ID, matrix_i.mat, reference/reference_i.exr, "
-        "scene.json");
-    c->add_option("SCENE", options->scene, "Scene name (see --list)");
+        "Render a built-in test scene, or a generated one (SCENE random, one scene per --seed), "
+        "into OUT_DIR: beauty_i.exr (noisy), albedo, normal, position, depth, ID, matrix_i.mat, "
+        "reference/reference_i.exr, scene.json");
+    c->add_option("SCENE", options->scene, "Scene name (see --list), or random");
     c->add_option("-o,--output", options->output, "Output folder (created if missing)");
     c->add_flag("--list", options->list, "List the scenes with what each one tests");
+    c->add_flag("--describe", options->describe,
+                "Print what SCENE is as JSON and render nothing: for random, every parameter the "
+                "seed drew (as scene.json's \"generator\" records it)");
     c->add_option("--width", s.width, "Image width in pixels")
         ->check(CLI::Range(1, 16384))
         ->capture_default_str();
@@ -105,7 +140,9 @@ Command addRenderCommand(CLI::App& app) {
     c->add_option("--ref-spp", s.referenceSpp, "Samples per pixel of the reference")
         ->check(CLI::Range(1, 1 << 20))
         ->capture_default_str();
-    c->add_option("--seed", s.seed, "Random seed (same seed, same files)")->capture_default_str();
+    c->add_option("--seed", s.seed,
+                  "Random seed (same seed, same files); for SCENE random also the scene drawn")
+        ->capture_default_str();
     c->add_option("--max-depth", s.maxDepth, "Surface interactions per path")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();

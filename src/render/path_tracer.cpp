@@ -1,4 +1,4 @@
-// The test-scene path tracer (~670 lines, a tool beside the library, not in it): BVH, materials,
+// The test-scene path tracer (~1150 lines, a tool beside the library, not in it): BVH, materials,
 // lights and the sampler are one unit, read together when a reference looks wrong.
 #include "render/path_tracer.h"
 
@@ -15,6 +15,8 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
+// GGX below this linear roughness (alpha 4e-4) would overflow D in float: a near-mirror.
+constexpr float kMinimumGgxRoughness = 0.02f;
 
 // ---- random numbers ----
 
@@ -164,9 +166,14 @@ struct CompiledObject {
     int primitiveCount = 0;
 };
 
-// An area light sampled by next-event estimation, in world space.
+// A light sampled by next-event estimation, in world space: an area light or the sun.
 struct Light {
     bool sphere = false;
+    bool sun = false;     // a cone of directions around sunDirection, at infinity
+    bool portal = false;  // a quad (both sides) through which background and sky are seen
+    Vec3 sunDirection;
+    float sunOneMinusCos = 0.0f;        // 1 - cos of the sun's angular radius
+    float sunConePdf = 0.0f;            // solid-angle pdf of uniform cone sampling
     Vec3 corner, edgeU, edgeV, normal;  // quad; normal on the front face
     float area = 0.0f;
     Vec3 centre;  // sphere
@@ -209,13 +216,112 @@ float sphereConePdf(const Light& l, Vec3 x, float& cosMax) {
     return 1.0f / (2.0f * kPi * oneMinusCos);
 }
 
-// Diffuse plus normalised Phong at one shading point; n faces wo.
+// ---- GGX ----
+
+// Smith's Lambda of GGX for a local direction w (z along the normal).
+float ggxLambda(float alpha, Vec3 w) {
+    float tan2 = (w.x * w.x + w.y * w.y) / (w.z * w.z);
+    return 0.5f * (std::sqrt(1.0f + alpha * alpha * tan2) - 1.0f);
+}
+
+// A normal of GGX's visible-normal distribution seen from local wo (Heitz 2018).
+Vec3 sampleVisibleNormal(float alpha, Vec3 wo, float u1, float u2) {
+    Vec3 v = normalize(Vec3(alpha * wo.x, alpha * wo.y, wo.z));
+    float lengthSquared = v.x * v.x + v.y * v.y;
+    Vec3 t1 = lengthSquared > 0.0f ? Vec3(-v.y, v.x, 0.0f) / std::sqrt(lengthSquared)
+                                   : Vec3(1.0f, 0.0f, 0.0f);
+    Vec3 t2 = cross(v, t1);
+    float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
+    float p1 = r * std::cos(phi), p2 = r * std::sin(phi);
+    float s = 0.5f * (1.0f + v.z);
+    p2 = (1.0f - s) * std::sqrt(std::max(0.0f, 1.0f - p1 * p1)) + s * p2;
+    Vec3 visible = t1 * p1 + t2 * p2 + v * std::sqrt(std::max(0.0f, 1.0f - p1 * p1 - p2 * p2));
+    return normalize(Vec3(alpha * visible.x, alpha * visible.y, std::max(1e-6f, visible.z)));
+}
+
+// The directional albedo E(mu, roughness) of the single-scattering GGX lobe (no Fresnel term) and
+// its cosine-weighted mean over mu. Single scattering loses up to 70 % at roughness 1 (what light
+// would leave after bouncing between microfacets); Kulla and Conty's (2017) lobe
+// (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)) gives it back, so a white metal reflects 1 at
+// every roughness. Computed once, with fixed stratified samples: the same table every run.
+class GgxAlbedoTable {
+  public:
+    static constexpr int kSize = 32;  // roughness 0..1 and mu (midpoints of 32 bins) each
+
+    GgxAlbedoTable() {
+        constexpr int kStrata = 16;
+        for (int r = 0; r < kSize; ++r) {
+            const float roughness = std::max(kMinimumGgxRoughness, float(r) / float(kSize - 1));
+            const float alpha = roughness * roughness;
+            double average = 0.0;
+            for (int m = 0; m < kSize; ++m) {
+                const float mu = (float(m) + 0.5f) / float(kSize);
+                const Vec3 wo{std::sqrt(1.0f - mu * mu), 0.0f, mu};
+                const float lambdaO = ggxLambda(alpha, wo);
+                double sum = 0.0;  // of G2 / G1, each visible-normal sample's f cos / pdf
+                for (int i = 0; i < kStrata; ++i)
+                    for (int j = 0; j < kStrata; ++j) {
+                        const Vec3 h = sampleVisibleNormal(alpha, wo, (float(i) + 0.5f) / kStrata,
+                                                           (float(j) + 0.5f) / kStrata);
+                        const Vec3 wi = h * (2.0f * dot(wo, h)) - wo;
+                        if (wi.z > 0.0f)
+                            sum += (1.0 + lambdaO) / (1.0 + lambdaO + ggxLambda(alpha, wi));
+                    }
+                albedo_[r][m] = float(sum / (kStrata * kStrata));
+                average += 2.0 * albedo_[r][m] * mu / kSize;
+            }
+            average_[r] = float(average);
+        }
+    }
+    // Linear in roughness and mu between the table's points (clamped at its ends).
+    float albedo(float roughness, float mu) const {
+        const auto [r0, r1, rt] = locate(roughness * float(kSize - 1));
+        const auto [m0, m1, mt] = locate(mu * float(kSize) - 0.5f);
+        const float low = albedo_[r0][m0] + (albedo_[r0][m1] - albedo_[r0][m0]) * mt;
+        const float high = albedo_[r1][m0] + (albedo_[r1][m1] - albedo_[r1][m0]) * mt;
+        return low + (high - low) * rt;
+    }
+    float average(float roughness) const {
+        const auto [r0, r1, rt] = locate(roughness * float(kSize - 1));
+        return average_[r0] + (average_[r1] - average_[r0]) * rt;
+    }
+
+  private:
+    struct Cell {
+        int lo, hi;
+        float t;
+    };
+    static Cell locate(float x) {
+        x = std::clamp(x, 0.0f, float(kSize - 1));
+        const int lo = std::min(int(x), kSize - 2);
+        return {lo, lo + 1, x - float(lo)};
+    }
+    float albedo_[kSize][kSize] = {};
+    float average_[kSize] = {};
+};
+
+const GgxAlbedoTable& ggxAlbedo() {
+    static const GgxAlbedoTable table;
+    return table;
+}
+
+// Diffuse plus a glossy lobe (normalised Phong, or GGX: Material) at one shading point; n faces
+// wo. The Phong lobe's code is the built-in scenes' as it was (its images differ from before the
+// GGX lobe in their last bits only: contraction follows the code around it).
 struct Bsdf {
     Vec3 diffuse;  // (1 - specular) albedo
     float specular = 0.0f;
     float exponent = 1.0f;
     Vec3 n, reflected;
     float specularProbability = 0.0f;
+    // GGX: the lobe's alpha, colour, and the shading frame (tangent, bitangent, n) in which wo is
+    // woLocal; its multiple-scattering lobe is multipleScattering * (1 - E(mu_i)).
+    bool ggx = false;
+    float roughness = 1.0f;
+    float alpha = 1.0f;
+    float multipleScattering = 0.0f;
+    Vec3 tint{1.0f};
+    Vec3 tangent, bitangent, woLocal;
 
     Bsdf(const Material& m, Vec3 albedo, Vec3 normal, Vec3 wo)
         : diffuse(albedo * (1.0f - m.specular)),
@@ -225,30 +331,103 @@ struct Bsdf {
           reflected(normal * (2.0f * dot(wo, normal)) - wo) {
         float weight = specular + luminance(diffuse);
         specularProbability = weight > 0.0f ? specular / weight : 0.0f;
+        if (m.lobe == Material::Lobe::Ggx && specular > 0.0f) setUpGgx(m, wo);
+    }
+    void setUpGgx(const Material& m, Vec3 wo) {
+        ggx = true;
+        roughness = std::clamp(m.roughness, kMinimumGgxRoughness, 1.0f);
+        alpha = roughness * roughness;
+        tint = m.specularTint;
+        orthonormalBasis(n, tangent, bitangent);
+        woLocal = toLocal(wo);
+        const GgxAlbedoTable& table = ggxAlbedo();
+        const float single = table.albedo(roughness, std::max(0.0f, woLocal.z));
+        const float average = table.average(roughness);
+        multipleScattering = average < 0.9999f ? (1.0f - single) / (kPi * (1.0f - average)) : 0.0f;
+        // Lobes picked by the albedo they reflect, the tint's included: visible-normal sampling
+        // for the single-scattering part, cosine sampling for the rest (multiple scattering and
+        // diffuse, both nearly cosine-shaped).
+        float glossy = specular * luminance(tint);
+        float weight = glossy + luminance(diffuse);
+        specularProbability = weight > 0.0f ? glossy * single / weight : 0.0f;
     }
     bool black() const { return specular <= 0.0f && maxComponent(diffuse) <= 0.0f; }
+
+    Vec3 toLocal(Vec3 w) const { return {dot(w, tangent), dot(w, bitangent), dot(w, n)}; }
+    Vec3 fromLocal(Vec3 l) const { return tangent * l.x + bitangent * l.y + n * l.z; }
+
+    // GGX (Walter et al. 2007) in the local frame: the normal distribution D and Smith's Lambda.
+    float ggxDistribution(Vec3 h) const {
+        float a2 = alpha * alpha;
+        float d = (h.x * h.x + h.y * h.y) / a2 + h.z * h.z;
+        return 1.0f / (kPi * a2 * d * d);
+    }
+    // D G2 / (4 cos_o cos_i) with height-correlated G2 = 1 / (1 + Lambda_o + Lambda_i); 0 when
+    // either direction is below the surface.
+    float ggxValue(Vec3 wi) const {
+        Vec3 l = toLocal(wi);
+        if (!(woLocal.z > 0.0f) || !(l.z > 0.0f)) return 0.0f;
+        Vec3 h = woLocal + l;
+        float len = length(h);
+        if (!(len > 0.0f)) return 0.0f;
+        h = h / len;
+        return ggxDistribution(h) /
+               (4.0f * woLocal.z * l.z * (1.0f + ggxLambda(alpha, woLocal) + ggxLambda(alpha, l)));
+    }
+    // Of sampling visible normals: G1(wo) D(h) / (4 cos_o).
+    float ggxPdf(Vec3 wi) const {
+        Vec3 l = toLocal(wi);
+        if (!(woLocal.z > 0.0f) || !(l.z > 0.0f)) return 0.0f;
+        Vec3 h = woLocal + l;
+        float len = length(h);
+        if (!(len > 0.0f)) return 0.0f;
+        h = h / len;
+        return ggxDistribution(h) / (4.0f * woLocal.z * (1.0f + ggxLambda(alpha, woLocal)));
+    }
+    // Visible-normal sampling (Heitz 2018): for the single-scattering lobe alone f cos / pdf =
+    // G2 / G1 <= 1, so no sample is a firefly of the lobe's own making.
+    Vec3 sampleGgxLobe(float u1, float u2) const {
+        const Vec3 m = sampleVisibleNormal(alpha, woLocal, u1, u2);
+        return fromLocal(m * (2.0f * dot(woLocal, m)) - woLocal);
+    }
+    // Kulla and Conty's multiple-scattering lobe (GgxAlbedoTable); 0 below the surface.
+    float multipleScatteringValue(Vec3 wi) const {
+        const float mu = dot(wi, n);
+        if (!(mu > 0.0f) || multipleScattering <= 0.0f) return 0.0f;
+        return multipleScattering * (1.0f - ggxAlbedo().albedo(roughness, mu));
+    }
 
     float lobe(Vec3 wi) const {  // cos^n of the angle to the mirror direction, 0 behind
         float c = dot(reflected, wi);
         return c > 0.0f ? std::pow(c, exponent) : 0.0f;
     }
     // The glossy lobe's part of evaluate() (the same expression), for the split signal.
-    float evaluateSpecular(Vec3 wi) const {
+    Vec3 evaluateSpecular(Vec3 wi) const {
+        return ggx ? tint * (specular * (ggxValue(wi) + multipleScatteringValue(wi)))
+                   : Vec3(evaluateSpecularPhong(wi));
+    }
+    Vec3 evaluate(Vec3 wi) const { return ggx ? evaluateGgx(wi) : evaluatePhong(wi); }
+    float pdf(Vec3 wi) const { return ggx ? pdfGgx(wi) : pdfPhong(wi); }
+    // A direction from the mixture; false when it points below the surface.
+    bool sample(Rng& rng, Vec3& wi) const {
+        return ggx ? sampleGgx(rng, wi) : samplePhong(rng, wi);
+    }
+
+    float evaluateSpecularPhong(Vec3 wi) const {
         return specular > 0.0f ? specular * (exponent + 2.0f) / (2.0f * kPi) * lobe(wi) : 0.0f;
     }
-    Vec3 evaluate(Vec3 wi) const {
+    Vec3 evaluatePhong(Vec3 wi) const {
         Vec3 f = diffuse * (1.0f / kPi);
         if (specular > 0.0f) f += Vec3(specular * (exponent + 2.0f) / (2.0f * kPi) * lobe(wi));
         return f;
     }
-    float pdf(Vec3 wi) const {
+    float pdfPhong(Vec3 wi) const {
         float p = (1.0f - specularProbability) * std::max(0.0f, dot(wi, n)) / kPi;
         if (specularProbability > 0.0f)
             p += specularProbability * (exponent + 1.0f) / (2.0f * kPi) * lobe(wi);
         return p;
     }
-    // A direction from the mixture; false when it points below the surface.
-    bool sample(Rng& rng, Vec3& wi) const {
+    bool samplePhong(Rng& rng, Vec3& wi) const {
         float choice = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         float phi = 2.0f * kPi * u2;
         Vec3 t, b;
@@ -262,6 +441,27 @@ struct Bsdf {
             orthonormalBasis(n, t, b);
             wi = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) +
                  n * std::sqrt(std::max(0.0f, 1.0f - u1));
+        }
+        return dot(wi, n) > 0.0f;
+    }
+
+    Vec3 evaluateGgx(Vec3 wi) const {
+        return diffuse * (1.0f / kPi) +
+               tint * (specular * (ggxValue(wi) + multipleScatteringValue(wi)));
+    }
+    float pdfGgx(Vec3 wi) const {
+        return (1.0f - specularProbability) * std::max(0.0f, dot(wi, n)) / kPi +
+               specularProbability * ggxPdf(wi);
+    }
+    // The same three random numbers as Phong's: lobe choice, then two for the direction.
+    bool sampleGgx(Rng& rng, Vec3& wi) const {
+        float choice = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        if (choice < specularProbability) {
+            wi = sampleGgxLobe(u1, u2);
+        } else {
+            float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
+            wi = fromLocal(
+                {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1.0f - u1))});
         }
         return dot(wi, n) > 0.0f;
     }
@@ -360,6 +560,33 @@ class CompiledScene {
     }
 
     const Material& material(int object) const { return scene_.objects[object].material; }
+
+    // Radiance along a ray that leaves the scene: background, sky and, inside the sun's cone, the
+    // sun. bsdfPdf > 0: the ray is a BSDF sample, and the sun shares it with next-event
+    // estimation by MIS; 0 (camera rays): the sun counts in full. Without sky or sun it is the
+    // background, as it always was.
+    Vec3 escapedRadiance(Vec3 origin, Vec3 direction, float bsdfPdf) const {
+        if (!scene_.sky.enabled() && sunLight_ < 0 && portals_.empty()) return scene_.background;
+        Vec3 l = scene_.background;
+        if (scene_.sky.enabled()) l += scene_.sky.radiance(direction);
+        // Through a portal, background and sky share the path with its next-event estimation.
+        if (bsdfPdf > 0.0f && !portals_.empty()) {
+            float portalPdf = 0.0f;
+            for (int index : portals_)
+                portalPdf += pdfThroughPortal(lights_[std::size_t(index)], origin, direction);
+            if (portalPdf > 0.0f) l = l * powerHeuristic(bsdfPdf, portalPdf);
+        }
+        if (sunLight_ >= 0) {
+            const Light& sun = lights_[std::size_t(sunLight_)];
+            if (1.0f - dot(direction, sun.sunDirection) <= sun.sunOneMinusCos) {
+                float weight = bsdfPdf > 0.0f
+                                   ? powerHeuristic(bsdfPdf, sun.probability * sun.sunConePdf)
+                                   : 1.0f;
+                l += sun.emission * weight;
+            }
+        }
+        return l;
+    }
     int lightOf(int primitive) const { return lightOf_[primitive]; }
     bool hasLights() const { return !lights_.empty(); }
 
@@ -376,11 +603,38 @@ class CompiledScene {
         return l.probability * t * t / (cosLight * l.area);
     }
 
+    // Solid-angle pdf with which next-event estimation from `x` samples `direction` through
+    // portal `l` (0 when the ray misses it).
+    static float pdfThroughPortal(const Light& l, Vec3 x, Vec3 direction) {
+        const float denominator = dot(l.normal, direction);
+        if (denominator == 0.0f) return 0.0f;
+        const float t = dot(l.normal, l.corner - x) / denominator;
+        if (!(t > 0.0f)) return 0.0f;
+        const Vec3 rel = x + direction * t - l.corner;
+        const float a = dot(rel, l.edgeU) / dot(l.edgeU, l.edgeU);
+        const float b = dot(rel, l.edgeV) / dot(l.edgeV, l.edgeV);
+        if (a < 0.0f || a > 1.0f || b < 0.0f || b > 1.0f) return 0.0f;
+        return l.probability * t * t / (std::abs(denominator) * l.area);
+    }
+
     bool sampleLight(Vec3 x, Rng& rng, LightSample& out) const {
         float pick = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         std::size_t index = 0;
         while (index + 1 < lights_.size() && pick >= lights_[index].cdf) ++index;
         const Light& l = lights_[index];
+        if (l.sun) {
+            float cosT = 1.0f - u1 * l.sunOneMinusCos;
+            float sinT = std::sqrt(std::max(0.0f, 1.0f - cosT * cosT));
+            float phi = 2.0f * kPi * u2;
+            Vec3 t, b;
+            orthonormalBasis(l.sunDirection, t, b);
+            out.direction =
+                t * (sinT * std::cos(phi)) + b * (sinT * std::sin(phi)) + l.sunDirection * cosT;
+            out.distance = kInfinity;
+            out.emission = l.emission;
+            out.pdf = l.probability * l.sunConePdf;
+            return true;
+        }
         if (l.sphere) {
             float cosMax = 0.0f;
             float pdf = sphereConePdf(l, x, cosMax);
@@ -408,6 +662,14 @@ class CompiledScene {
         if (dist2 <= 0.0f) return false;
         out.distance = std::sqrt(dist2);
         out.direction = d / out.distance;
+        if (l.portal) {  // the sky beyond it: unoccluded all the way out
+            const float cosPortal = std::abs(dot(l.normal, out.direction));
+            if (cosPortal <= 0.0f) return false;
+            out.emission = scene_.background + scene_.sky.radiance(out.direction);
+            out.pdf = l.probability * dist2 / (cosPortal * l.area);
+            out.distance = kInfinity;
+            return true;
+        }
         float cosLight = -dot(l.normal, out.direction);
         if (!l.twoSided && cosLight <= 0.0f) return false;  // the back of a one-sided light
         cosLight = std::abs(cosLight);
@@ -522,11 +784,53 @@ class CompiledScene {
                 total += watts;
             }
         }
+        // Portals: by the power of the mean of the sky's zenith and horizon through them (the
+        // ground's is seen from inside through few of them).
+        for (const SkyPortal& portal : scene_.skyPortals) {
+            Light l;
+            l.portal = true;
+            l.twoSided = true;
+            l.corner = portal.corner;
+            l.edgeU = portal.edgeU;
+            l.edgeV = portal.edgeV;
+            l.area = length(cross(l.edgeU, l.edgeV));
+            if (!(l.area > 0.0f)) continue;
+            l.normal = cross(l.edgeU, l.edgeV) / l.area;
+            const Vec3 radiance =
+                scene_.background + (scene_.sky.zenith + scene_.sky.horizon) * 0.5f;
+            const double watts = double(luminance(radiance)) * l.area;
+            if (!(watts > 0.0)) continue;
+            portals_.push_back(int(lights_.size()));
+            lights_.push_back(l);
+            power.push_back(watts);
+            total += watts;
+        }
+        // The sun's power is not comparable to an area light's: with both, each gets half the
+        // samples (area lights among themselves by power).
+        const bool sun = scene_.sun.enabled();
+        const double areaShare = sun && !lights_.empty() ? 0.5 : 1.0;
         double running = 0.0;
         for (std::size_t i = 0; i < lights_.size(); ++i) {
             running += power[i];
-            lights_[i].probability = float(power[i] / total);
-            lights_[i].cdf = float(running / total);
+            lights_[i].probability = float(power[i] / total * areaShare);
+            lights_[i].cdf = float(running / total * areaShare);
+        }
+        if (sun) {
+            const Sun& s = scene_.sun;
+            Light l;
+            l.sun = true;
+            l.sunDirection = normalize(s.direction);
+            const float radius = std::clamp(s.angularRadiusDegrees, 1e-3f, 10.0f) * (kPi / 180.0f);
+            const float sinHalf = std::sin(0.5f * radius);
+            l.sunOneMinusCos = 2.0f * sinHalf * sinHalf;  // without cancellation
+            l.sunConePdf = 1.0f / (2.0f * kPi * l.sunOneMinusCos);
+            // A uniform disc of radiance L and angular radius r gives irradiance L pi sin^2 r.
+            const float sinRadius = std::sin(radius);
+            l.emission = s.irradiance * (1.0f / (kPi * sinRadius * sinRadius));
+            l.probability = float(1.0 - (lights_.empty() ? 0.0 : areaShare));
+            l.cdf = 1.0f;
+            sunLight_ = int(lights_.size());
+            lights_.push_back(l);
         }
     }
 
@@ -536,6 +840,8 @@ class CompiledScene {
     std::vector<TracePrimitive> primitives_;
     std::vector<int> lightOf_;  // per primitive: its light, or -1
     std::vector<Light> lights_;
+    int sunLight_ = -1;         // the sun's index in lights_, or -1
+    std::vector<int> portals_;  // the portals' indices in lights_
 };
 
 // One camera path. With `specular`, it also receives the part of the radiance that left the
@@ -556,9 +862,10 @@ Vec3 radiance(const CompiledScene& scene, Ray ray, int maxDepth, Rng& rng,
     for (int depth = 0; depth < maxDepth; ++depth) {
         Hit hit = scene.closest(ray);
         if (hit.object < 0) {
-            result += throughput * scene.scene().background;
+            const Vec3 escaped = scene.escapedRadiance(ray.origin, ray.direction, previousPdf);
+            result += throughput * escaped;
             if (split)
-                if (depth > 0) specularResult += specularThroughput * scene.scene().background;
+                if (depth > 0) specularResult += specularThroughput * escaped;
             break;
         }
         Surface s = scene.surface(ray, hit);
@@ -767,6 +1074,7 @@ namespace {
 
 float linearRoughness(const Material& m) {
     if (!(m.specular > 0.0f)) return 1.0f;  // no glossy lobe: as rough as it gets
+    if (m.lobe == Material::Lobe::Ggx) return std::clamp(m.roughness, kMinimumGgxRoughness, 1.0f);
     // Phong exponent n ~ Beckmann/GGX alpha = sqrt(2 / (n + 2)); linear roughness = sqrt(alpha).
     float alpha = std::sqrt(2.0f / (std::max(0.0f, m.exponent) + 2.0f));
     return std::clamp(std::sqrt(alpha), 0.0f, 1.0f);
@@ -801,7 +1109,13 @@ Frame renderGBuffer(const Scene& scene, int width, int height, bool split) {
                 p = s.position;
                 n = dot(s.normal, ray.direction) < 0.0f ? s.normal : -s.normal;
                 depth = dot(p - camera.position, camera.forward);
-                albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular) + Vec3(m.specular);
+                // The glossy lobe's share counts with its colour (a metal's albedo is its tint);
+                // Phong's lobe is white, and its expression is the one it always was.
+                if (m.lobe == Material::Lobe::Ggx)
+                    albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular) +
+                             m.specularTint * m.specular;
+                else
+                    albedo = m.albedo.evaluate(s.u, s.v) * (1.0f - m.specular) + Vec3(m.specular);
                 if (split) {
                     f.roughness->at(x, y) = linearRoughness(m);
                     // The mirror direction's hit distance: deterministic and noise-free (not the

@@ -1,5 +1,6 @@
 // CPU path tracer over the analytic scenes of scene.h: next-event estimation towards area lights
-// combined with BSDF sampling by multiple importance sampling (power heuristic), Russian
+// and the sun combined with BSDF sampling by multiple importance sampling (power heuristic); the
+// sky and unsampled emitters are found by BSDF sampling alone; Russian
 // roulette, OpenMP over rows. Random numbers come from a hash of (seed, stream, frame, pixel,
 // sample), so a frame is the same whatever the thread count.
 #pragma once
@@ -32,11 +33,11 @@ constexpr std::uint32_t kReferenceStream = 1;
 // Mean radiance of `samplesPerPixel` camera paths per pixel, each through a uniformly jittered
 // point of the pixel; 3 channels. Nothing is clamped; a non-finite sample counts as 0.
 // With specularOut, also the split signal into it (3 channels, the same paths): the part of the
-// radiance that left each path's first surface through its glossy (Phong) lobe, split exactly by
-// lobe there (next-event estimation at the first surface by BSDF term, everything after it in
-// the ratio f_specular / f at the sampled direction). Emission at the first hit and background
-// seen by the camera are diffuse; the diffuse part is the radiance minus it. The returned
-// radiance (and the random numbers) are the same with or without it.
+// radiance that left each path's first surface through its glossy (Phong or GGX) lobe, split
+// exactly by lobe there (next-event estimation at the first surface by BSDF term, everything after
+// it in the ratio f_specular / f at the sampled direction). Emission at the first hit and
+// background seen by the camera are diffuse; the diffuse part is the radiance minus it. The
+// returned radiance (and the random numbers) are the same with or without it.
 Image renderRadiance(const Scene& scene, const TraceSettings& settings,
                      Image* specularOut = nullptr);
 
@@ -62,10 +63,11 @@ std::vector<GradientSample> traceGradientSamples(const Scene& previous, const Sc
 
 // G-buffer from the primary ray through each pixel centre: normal (world, unit, facing the
 // camera), position (the camera position on background), depth (camera z, 0 on background),
-// object ID (-1 on background), albedo (diffuse texture times (1 - specular) plus specular, 0
-// on background) and the matrices. The beauty is left empty.
-// With split (the split signal's G-buffer), also roughness: the first surface's linear roughness (Phong exponent n as GGX alpha
-// = sqrt(2 / (n + 2)), roughness = sqrt(alpha); 1 without a glossy lobe, 0 on background) and
+// object ID (-1 on background), albedo (diffuse texture times (1 - specular) plus specular times
+// the lobe's colour, white for Phong; 0 on background) and the matrices. The beauty is left empty.
+// With split (the split signal's G-buffer), also roughness: the first surface's linear roughness
+// (GGX: the material's, at least 0.02; Phong exponent n as GGX alpha = sqrt(2 / (n + 2)),
+// roughness = sqrt(alpha); 1 without a glossy lobe, 0 on background) and
 // hitDistance the distance along the mirror reflection of the pixel-centre ray about the normal
 // (deterministic, noise-free; 0 on a miss, on background and without a glossy lobe).
 Frame renderGBuffer(const Scene& scene, int width, int height, bool split = false);

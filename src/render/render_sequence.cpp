@@ -11,6 +11,7 @@
 
 #include "render/confidence.h"
 #include "render/path_tracer.h"
+#include "render/random_scene.h"
 #include "render/scenes.h"
 #include "rtdenoise/error.h"
 #include "rtdenoise/io.h"
@@ -107,13 +108,13 @@ std::string sceneJson(const SceneDefinition& d, const RenderSettings& s,
         "  \"format\": {},\n"
         "  \"motion\": {},\n"
         "  \"moving\": {{\"objects\": {}, \"camera\": {}, \"lights\": {}}},\n"
-        "  \"objects\": [\n{}\n  ]\n"
+        "  \"objects\": [\n{}\n  ]{}\n"
         "}}\n",
         jsonString(d.name), jsonString(d.description), s.width, s.height, s.frames, s.spp,
         s.gbufferOnly ? 0 : s.referenceSpp, !s.gbufferOnly, s.seed, s.maxDepth,
         jsonString(s.format == OutputFormat::Multilayer ? "multilayer" : "folder"),
         jsonString(d.motion), jsonList(movingObjects), motion.camera, jsonList(changingLights),
-        objects);
+        objects, d.generator.empty() ? "" : ",\n  \"generator\": " + d.generator);
 }
 
 // "<prefix>_<n>.<ext>" of the layout with n >= frames: left from an earlier, longer render they
@@ -297,6 +298,10 @@ void renderSequence(const std::string& sceneName, const RenderSettings& settings
     const SceneDefinition* definition = nullptr;
     for (const SceneDefinition& d : builtInScenes())
         if (d.name == sceneName) definition = &d;
+    // The generator's scenes: the seed draws the scene (and, as always, the noise).
+    const SceneDefinition generated =
+        sceneName == kRandomSceneName ? randomSceneDefinition(settings.seed) : SceneDefinition{};
+    if (sceneName == kRandomSceneName) definition = &generated;
     if (!definition) buildScene(sceneName, 0);  // throws, listing the scenes
 
     std::vector<Scene> scenes;

@@ -1,5 +1,6 @@
-// `rtdenoise render`'s engine: renders a built-in scene into a sequence folder in the course
-// layout (shared/data/README.md) with a converged reference from the same camera.
+// `rtdenoise render`'s engine: renders a built-in scene, or the scene generator's scene of a seed
+// (render/random_scene.h), into a sequence folder in the course layout (shared/data/README.md)
+// with a converged reference from the same camera.
 #pragma once
 
 #include <cstdint>
@@ -23,17 +24,17 @@ struct RenderSettings {
     int width = 320;
     int height = 240;
     int frames = 16;
-    int spp = 1;             // samples per pixel of the noisy beauty
-    int referenceSpp = 256;  // samples per pixel of reference/reference_<i>.exr
-    std::uint32_t seed = 1;
+    int spp = 1;               // samples per pixel of the noisy beauty
+    int referenceSpp = 256;    // samples per pixel of reference/reference_<i>.exr
+    std::uint32_t seed = 1;    // the noise's; for the scene "random" also the scene drawn
     int maxDepth = 8;          // surface interactions per path
     bool gbufferOnly = false;  // beauty and G-buffers only: no reference
     // Also confidence_<i>.exr (folder layout only): the history confidence of A-SVGF's temporal
     // gradients (render/confidence.h), 1 on frame 0; about 2/9 more paths than a 1-spp beauty.
     bool confidence = false;
     // The split signal too (folder layout only): specular_<i>.exr (the beauty's glossy part, at
-    // its spp, from the same paths), roughness_<i>.exr and hit_distance_<i>.exr (render/path_tracer.h's
-    // renderFrame with split). No extra paths.
+    // its spp, from the same paths), roughness_<i>.exr and hit_distance_<i>.exr
+    // (render/path_tracer.h's renderFrame with split). No extra paths.
     bool split = false;
     OutputFormat format = OutputFormat::Folder;
 };
@@ -47,7 +48,8 @@ std::vector<SceneInfo> listScenes();
 // depth_i.exr, ID_i.exr, matrix_i.mat, confidence_i.exr (with `confidence`), specular_i.exr,
 // roughness_i.exr and hit_distance_i.exr (with `split`) and (unless
 // gbufferOnly) reference/reference_i.exr, plus
-// scene.json describing the render (written last). With OutputFormat::Multilayer, frame i is
+// scene.json describing the render (written last; for "random" with "generator": what the seed
+// drew, render/random_scene.h's describeJson). With OutputFormat::Multilayer, frame i is
 // instead the Blender-style multilayer <i+1>.exr (0001.exr ..., writeBlenderExr: motion vectors
 // from the matrices of frames i-1 and i+1) and its reference reference/<i+1>.exr (R, G, B).
 // Files of the layout numbered >= frames, left by an earlier longer render, are removed so that

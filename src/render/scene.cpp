@@ -1,9 +1,40 @@
 #include "render/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 namespace rtd::render {
+
+namespace {
+
+// A value in [0, 1) for an integer lattice point: value noise's corner values.
+float latticeValue(std::int64_t i, std::int64_t j, std::uint32_t seed) {
+    std::uint64_t h = std::uint64_t(i) * 0x9e3779b97f4a7c15ull ^
+                      (std::uint64_t(j) + 0x632be59bd9b4e019ull) * 0xbf58476d1ce4e5b9ull ^
+                      std::uint64_t(seed) * 0x94d049bb133111ebull;
+    h = (h ^ (h >> 31)) * 0xd6e8feb86659fd93ull;
+    h ^= h >> 32;
+    return float(h & 0xffffffu) * 0x1p-24f;
+}
+
+// Smoothly interpolated value noise in [0, 1).
+float valueNoise(float u, float v, std::uint32_t seed) {
+    const float fu = std::floor(u), fv = std::floor(v);
+    const auto i = std::int64_t(fu), j = std::int64_t(fv);
+    float x = u - fu, y = v - fv;
+    x = x * x * (3.0f - 2.0f * x);
+    y = y * y * (3.0f - 2.0f * y);
+    const float a = latticeValue(i, j, seed), b = latticeValue(i + 1, j, seed);
+    const float c = latticeValue(i, j + 1, seed), d = latticeValue(i + 1, j + 1, seed);
+    return (a + (b - a) * x) * (1.0f - y) + (c + (d - c) * x) * y;
+}
+
+Vec3 mix(Vec3 a, Vec3 b, float t) {
+    return a * (1.0f - t) + b * t;
+}
+
+}  // namespace
 
 Vec3 Texture::evaluate(float u, float v) const {
     switch (kind) {
@@ -16,8 +47,33 @@ Vec3 Texture::evaluate(float u, float v) const {
         }
         case Kind::Stripes:
             return (std::int64_t(std::floor(u * frequency)) & 1) ? b : a;
+        case Kind::Noise: {
+            // Fractal sum of octaves (gain 1/2), stretched so that most of [a, b] is used: the
+            // sum alone clusters around its middle.
+            float sum = 0.0f, weight = 1.0f, total = 0.0f, scale = frequency;
+            for (int octave = 0; octave < std::clamp(noiseOctaves, 1, 8); ++octave) {
+                sum += weight * valueNoise(u * scale, v * scale, noiseSeed + std::uint32_t(octave));
+                total += weight;
+                weight *= 0.5f;
+                scale *= 2.0f;
+            }
+            return mix(a, b, std::clamp(0.5f + 1.8f * (sum / total - 0.5f), 0.0f, 1.0f));
+        }
+        case Kind::Tiles: {
+            const float x = u * frequency - std::floor(u * frequency);
+            const float y = v * frequency - std::floor(v * frequency);
+            const float half = 0.5f * groutWidth;
+            const bool grout = x < half || x > 1.0f - half || y < half || y > 1.0f - half;
+            return grout ? b : a;
+        }
     }
     return a;
+}
+
+Vec3 Sky::radiance(Vec3 direction) const {
+    if (direction.y < 0.0f) return ground;
+    // sqrt: the sky stays near the horizon's colour for the low directions that most rays take.
+    return mix(horizon, zenith, std::sqrt(std::min(1.0f, direction.y)));
 }
 
 Matrix4 operator*(const Matrix4& a, const Matrix4& b) {

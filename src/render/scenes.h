@@ -16,6 +16,9 @@ struct SceneDefinition {
     std::string description;  // one line: what it shows and which failure it provokes
     std::string motion;       // what moves, in words (scene.json)
     std::function<Scene(int frame)> build;
+    // What a scene generator drew, a JSON object (scene.json's "generator"); empty for the
+    // built-in scenes.
+    std::string generator{};
 };
 
 const std::vector<SceneDefinition>& builtInScenes();
