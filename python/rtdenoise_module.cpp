@@ -395,6 +395,8 @@ py::dict metricsDict(const rtd::metrics::FrameMetrics& metrics) {
     result["ssim"] = metrics.ssim;
     result["temporal_error"] =
         metrics.temporalError ? py::object(py::float_(*metrics.temporalError)) : py::none();
+    result["result_mean"] = metrics.resultMean;
+    result["reference_mean"] = metrics.referenceMean;
     return result;
 }
 
@@ -406,6 +408,8 @@ rtd::metrics::FrameMetrics metricsOf(const py::dict& values) {
     metrics.ssim = values["ssim"].cast<double>();
     if (!values["temporal_error"].is_none())
         metrics.temporalError = values["temporal_error"].cast<double>();
+    metrics.resultMean = values["result_mean"].cast<double>();
+    metrics.referenceMean = values["reference_mean"].cast<double>();
     return metrics;
 }
 

@@ -215,6 +215,23 @@ TEST(Metrics, MismatchedImagesThrow) {
 
 // Issue 37 item 7: a reference pixel with a NaN or Inf (in any channel) has no right answer: it is
 // left out of every metric, which then scores the other pixels exactly.
+// The energy ratio: the result's mean over the reference's, per frame and for the sequence (the
+// ratio of the frames' summed means, not the mean of the ratios), over the finite reference
+// pixels only.
+TEST(Metrics, TheEnergyRatioIsTheMeansRatio) {
+    Image reference(4, 2, 3, 1.0f), dark(4, 2, 3, 0.9f), bright(4, 2, 3, 3.0f);
+    reference.at(0, 0, 1) = std::nanf("");
+    dark.at(0, 0, 1) = 100.0f;  // under the reference's NaN: left out
+    FrameMetrics a = metrics::compareFrame(dark, reference);
+    EXPECT_NEAR(metrics::energyRatio(a), 0.9, 1e-7);  // 0.9f
+    Image reference2(4, 2, 3, 2.0f);
+    FrameMetrics b = metrics::compareFrame(bright, reference2);
+    EXPECT_DOUBLE_EQ(metrics::energyRatio(b), 1.5);
+    EXPECT_NEAR(metrics::energyRatio(metrics::meanOf({a, b})), (0.9 + 3.0) / (1.0 + 2.0), 1e-7);
+    EXPECT_TRUE(
+        std::isnan(metrics::energyRatio(metrics::compareFrame(dark, Image(4, 2, 3, 0.0f)))));
+}
+
 TEST(Metrics, NonFiniteReferencePixelsAreLeftOutOfEveryMetric) {
     const int w = 9, h = 7;
     Image reference = constant(w, h, 0.25f), previousReference = reference;
@@ -379,15 +396,20 @@ TEST(CompareCli, PrintsTheTableAndWritesJsonAndCsv) {
     EXPECT_NE(json.find("{\"frame\": 0, \"mse\": 0.25, \"rel_mse\": 3.448275"), std::string::npos)
         << json;
     EXPECT_NE(json.find("\"frame\": 2"), std::string::npos) << json;
-    EXPECT_NE(json.find("\"temporal_error\": null}"), std::string::npos) << json;  // frame 0
-    EXPECT_NE(json.find("\"temporal_error\": 0}"), std::string::npos) << json;     // static frames
+    EXPECT_NE(json.find("\"temporal_error\": null, "), std::string::npos) << json;  // frame 0
+    EXPECT_NE(json.find("\"temporal_error\": 0, "), std::string::npos) << json;     // static frames
+    // Results of 0.75 against references of 0.25: three times the light.
+    EXPECT_NE(json.find("\"energy_ratio\": 3}"), std::string::npos) << json;
     EXPECT_EQ(json.find("inf"), std::string::npos) << json;
     EXPECT_EQ(std::count(json.begin(), json.end(), '{'), std::count(json.begin(), json.end(), '}'));
 
     const std::string csv = readText(dir.path() / "m.csv");
-    EXPECT_EQ(csv.rfind("frame,mse,rel_mse,psnr,ssim,temporal_error\n0,0.25,3.448275", 0), 0u)
+    EXPECT_EQ(
+        csv.rfind("frame,mse,rel_mse,psnr,ssim,temporal_error,energy_ratio\n0,0.25,3.448275", 0),
+        0u)
         << csv;
     EXPECT_NE(csv.find("\nmean,0.25,3.448275"), std::string::npos) << csv;
+    EXPECT_NE(csv.find(",3\n"), std::string::npos) << csv;   // the energy ratio
     EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5);  // header, 3 frames, mean
 
     // Quiet: nothing on the terminal, the files still written.

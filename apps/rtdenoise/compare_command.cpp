@@ -143,15 +143,16 @@ std::string csvNumber(const std::optional<double>& v) {
 }
 
 std::string tableRow(const std::string& label, const metrics::FrameMetrics& m) {
-    return fmt::format("{:>5}  {:>11}  {:>11}  {:>9.2f}  {:>7.4f}  {:>11}\n", label, sci(m.mse),
-                       sci(m.relMse), m.psnr, m.ssim,
-                       m.temporalError ? sci(*m.temporalError) : std::string("-"));
+    return fmt::format("{:>5}  {:>11}  {:>11}  {:>9.2f}  {:>7.4f}  {:>11}  {:>7.4f}\n", label,
+                       sci(m.mse), sci(m.relMse), m.psnr, m.ssim,
+                       m.temporalError ? sci(*m.temporalError) : std::string("-"),
+                       metrics::energyRatio(m));
 }
 
 // Row i of `s` is frame indices[i] of the sequence.
 std::string table(const metrics::SequenceMetrics& s, const std::vector<int>& indices) {
-    std::string out = fmt::format("{:>5}  {:>11}  {:>11}  {:>9}  {:>7}  {:>11}\n", "frame", "MSE",
-                                  "relMSE", "PSNR (dB)", "SSIM", "temporal");
+    std::string out = fmt::format("{:>5}  {:>11}  {:>11}  {:>9}  {:>7}  {:>11}  {:>7}\n", "frame",
+                                  "MSE", "relMSE", "PSNR (dB)", "SSIM", "temporal", "energy");
     for (std::size_t i = 0; i < s.frames.size(); ++i)
         out += tableRow(std::to_string(indices[i]), s.frames[i]);
     out += tableRow("mean", s.mean);
@@ -160,9 +161,10 @@ std::string table(const metrics::SequenceMetrics& s, const std::vector<int>& ind
 
 std::string jsonFields(const metrics::FrameMetrics& m) {
     return fmt::format(
-        "\"mse\": {}, \"rel_mse\": {}, \"psnr\": {}, \"ssim\": {}, \"temporal_error\": {}",
+        "\"mse\": {}, \"rel_mse\": {}, \"psnr\": {}, \"ssim\": {}, \"temporal_error\": {}, "
+        "\"energy_ratio\": {}",
         jsonNumber(m.mse), jsonNumber(m.relMse), jsonNumber(m.psnr), jsonNumber(m.ssim),
-        jsonNumber(m.temporalError));
+        jsonNumber(m.temporalError), jsonNumber(metrics::energyRatio(m)));
 }
 
 std::string json(const metrics::SequenceMetrics& s, const std::vector<int>& indices) {
@@ -176,12 +178,13 @@ std::string json(const metrics::SequenceMetrics& s, const std::vector<int>& indi
 }
 
 std::string csvRow(const std::string& label, const metrics::FrameMetrics& m) {
-    return fmt::format("{},{},{},{},{},{}\n", label, csvNumber(m.mse), csvNumber(m.relMse),
-                       csvNumber(m.psnr), csvNumber(m.ssim), csvNumber(m.temporalError));
+    return fmt::format("{},{},{},{},{},{},{}\n", label, csvNumber(m.mse), csvNumber(m.relMse),
+                       csvNumber(m.psnr), csvNumber(m.ssim), csvNumber(m.temporalError),
+                       csvNumber(metrics::energyRatio(m)));
 }
 
 std::string csv(const metrics::SequenceMetrics& s, const std::vector<int>& indices) {
-    std::string out = "frame,mse,rel_mse,psnr,ssim,temporal_error\n";
+    std::string out = "frame,mse,rel_mse,psnr,ssim,temporal_error,energy_ratio\n";
     for (std::size_t i = 0; i < s.frames.size(); ++i)
         out += csvRow(std::to_string(indices[i]), s.frames[i]);
     out += csvRow("mean", s.mean);
@@ -407,8 +410,10 @@ int runCompare(const CompareOptions& options) {
     if (!options.csv.empty()) writeFileAtomically(options.csv, csv(result, compared));
     if (!options.quiet) {
         fmt::print("{}", table(result, compared));
-        fmt::print("MSE, relMSE: linear RGB; PSNR, SSIM, temporal: tone-mapped (exposure {})\n",
-                   options.exposure);
+        fmt::print(
+            "MSE, relMSE, energy (result mean / reference mean): linear RGB; PSNR, SSIM, "
+            "temporal: tone-mapped (exposure {})\n",
+            options.exposure);
         if (sheets) {
             fmt::print(
                 "contact sheets ({}result | reference | relative error, viridis, log scale "

@@ -764,15 +764,22 @@ class Denoiser:
 
 @dataclasses.dataclass
 class FrameMetrics:
-    """A frame's quality against its reference, as `rtdenoise compare` prints it: mse and
-    relmse on the linear RGB; psnr (dB, inf when identical), ssim and temporal_error (None for
-    the first frame) on the tone-mapped images."""
+    """A frame's quality against its reference, as `rtdenoise compare` prints it: mse, relmse
+    and energy_ratio (result_mean / reference_mean) on the linear RGB; psnr (dB, inf when
+    identical), ssim and temporal_error (None for the first frame) on the tone-mapped images."""
 
     mse: float
     relmse: float
     psnr: float
     ssim: float
     temporal_error: Optional[float] = None
+    result_mean: float = 0.0
+    reference_mean: float = 0.0
+
+    @property
+    def energy_ratio(self) -> float:
+        """The result's light over the reference's (1: kept; NaN for a black reference)."""
+        return self.result_mean / self.reference_mean if self.reference_mean else float("nan")
 
 
 @dataclasses.dataclass
@@ -792,12 +799,12 @@ class Comparison:
         def row(label: str, m: FrameMetrics) -> str:
             return (
                 f"{label:>5}  {sci(m.mse):>11}  {sci(m.relmse):>11}  {m.psnr:>9.2f}  "
-                f"{m.ssim:>7.4f}  {sci(m.temporal_error):>11}\n"
+                f"{m.ssim:>7.4f}  {sci(m.temporal_error):>11}  {m.energy_ratio:>7.4f}\n"
             )
 
         header = (
             f"{'frame':>5}  {'MSE':>11}  {'relMSE':>11}  {'PSNR (dB)':>9}  {'SSIM':>7}  "
-            f"{'temporal':>11}\n"
+            f"{'temporal':>11}  {'energy':>7}\n"
         )
         rows = [row(str(i), m) for i, m in enumerate(self.frames)]
         return header + "".join(rows) + row("mean", self.mean)

@@ -438,6 +438,18 @@ FrameMetrics frameMetrics(const Image& result, const Image& reference, const Ima
     m.psnr = psnr(resultDisplay, referenceDisplay, scored);
     m.ssim = ssim(resultDisplay, referenceDisplay, scored);
     m.excludedPixels = excludedPixels(scored);
+    double resultSum = 0.0, referenceSum = 0.0;
+    std::size_t counted = 0;
+    for (std::size_t p = 0; p < reference.pixelCount(); ++p) {
+        if (!scored.empty() && !scored[p]) continue;
+        for (int c = 0; c < reference.channels; ++c) {
+            resultSum += result.pixels[p * std::size_t(result.channels) + std::size_t(c)];
+            referenceSum += reference.pixels[p * std::size_t(reference.channels) + std::size_t(c)];
+        }
+        counted += std::size_t(reference.channels);
+    }
+    m.resultMean = resultSum / double(std::max<std::size_t>(counted, 1));
+    m.referenceMean = referenceSum / double(std::max<std::size_t>(counted, 1));
     return m;
 }
 
@@ -458,6 +470,11 @@ FrameMetrics compareFrame(const Image& result, const Image& reference, float exp
                         finitePixels(reference));
 }
 
+double energyRatio(const FrameMetrics& m) {
+    return m.referenceMean != 0.0 ? m.resultMean / m.referenceMean
+                                  : std::numeric_limits<double>::quiet_NaN();
+}
+
 FrameMetrics meanOf(const std::vector<FrameMetrics>& frames) {
     if (frames.empty()) throw Error(ErrorCode::InvalidArgument, "meanOf: no frames");
     FrameMetrics mean;
@@ -470,6 +487,8 @@ FrameMetrics meanOf(const std::vector<FrameMetrics>& frames) {
         mean.psnr += f.psnr;
         mean.ssim += f.ssim;
         mean.excludedPixels += f.excludedPixels;
+        mean.resultMean += f.resultMean;
+        mean.referenceMean += f.referenceMean;
         if (f.temporalError) {
             temporalSum += *f.temporalError;
             ++temporalCount;
@@ -480,6 +499,8 @@ FrameMetrics meanOf(const std::vector<FrameMetrics>& frames) {
     mean.relMse /= n;
     mean.psnr /= n;
     mean.ssim /= n;
+    mean.resultMean /= n;
+    mean.referenceMean /= n;
     if (temporalCount > 0) mean.temporalError = temporalSum / double(temporalCount);
     return mean;
 }

@@ -2,7 +2,7 @@
 // at the difference. Separate from the denoiser library: the renderer's build never needs them.
 //
 // Which space each metric lives in:
-//   - MSE and relMSE on the linear RGB radiance (what the denoiser estimates);
+//   - MSE, relMSE and the energy ratio on the linear RGB radiance (what the denoiser estimates);
 //   - PSNR, SSIM and the temporal error on the display images, toneMap(x, exposure): values in
 //     [0,1], the space a viewer judges (and the one SSIM's constants are defined for).
 // "Display" arguments below are such tone-mapped 3-channel images.
@@ -77,7 +77,16 @@ struct FrameMetrics {
     double ssim = 1.0;
     std::optional<double> temporalError;  // absent for frame 0 (no previous frame)
     std::size_t excludedPixels = 0;       // reference pixels with NaN/Inf, left out of all above
+    // Means over the scored pixels and channels of the linear images: their ratio is the energy
+    // ratio (energyRatio), which a denoiser must keep near 1 (it must not trade the image's
+    // light for smoothness).
+    double resultMean = 0.0;
+    double referenceMean = 0.0;
 };
+
+// resultMean / referenceMean: 1 where the result holds the reference's light; for a sequence's
+// mean (meanOf), the ratio of the frames' summed means. NaN where the reference is black.
+double energyRatio(const FrameMetrics& m);
 
 // MSE and relMSE of the linear images; PSNR and SSIM of toneMap(., exposure), all over the
 // reference's finite pixels. No temporal error.
@@ -85,7 +94,8 @@ FrameMetrics compareFrame(const Image& result, const Image& reference, float exp
 
 // Means over frames. The temporal error's mean is over the frames that have one (1..N-1), absent
 // when none does. PSNR is the mean of the per-frame dB values, so one identical frame makes the
-// mean infinite. excludedPixels: the frames' sum.
+// mean infinite. excludedPixels: the frames' sum. resultMean, referenceMean: the frames' means,
+// so the energy ratio of the mean is the whole sequence's.
 FrameMetrics meanOf(const std::vector<FrameMetrics>& frames);
 
 struct SequenceMetrics {

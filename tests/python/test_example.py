@@ -16,7 +16,9 @@ def test_denoise_scene_example(scene, cli_denoised):
     )
     assert completed.returncode == 0, completed.stderr
     lines = completed.stdout.splitlines()
-    assert lines[1].split() == ["frame", "MSE", "relMSE", "PSNR", "(dB)", "SSIM", "temporal"]
+    assert lines[1].split() == [
+        "frame", "MSE", "relMSE", "PSNR", "(dB)", "SSIM", "temporal", "energy"
+    ]
     # svgf with its defaults: the command's results, so the command's table.
     expected = rtdenoise.compare(cli_denoised, scene / "reference")
     assert lines[2:-1] == expected.table().splitlines()[1:]

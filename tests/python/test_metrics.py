@@ -56,6 +56,7 @@ def test_matches_the_command_line_compare(cli, scene, cli_denoised, tmp_path):
     for got, want in rows:
         for ours, theirs in names.items():  # the same code: the same doubles
             assert getattr(got, ours) == want[theirs], ours
+        assert got.energy_ratio == pytest.approx(want["energy_ratio"], rel=1e-12)
     assert "mean" in comparison.table()
 
 
