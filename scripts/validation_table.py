@@ -1,0 +1,135 @@
+#!/usr/bin/env python3
+"""The validation protocol's table (issue 38; docs/corpus.md): every method on every validation
+set, with relMSE, PSNR, SSIM, temporal error and the energy ratio, and the train set beside it
+(the gap between them says how much was fitted). Nothing here chooses anything: it only reports.
+
+  scripts/validation_table.py [--corpus cache/corpus] [--cycles cache/validation_scenes]
+                              [--builtin cache/builtin] [--methods input,svgf,detail]
+                              [--train-limit N] [--jobs 1]
+
+Sets (each skipped, saying so, where its folder is missing):
+  - corpus/validation/seed_*  and  corpus/train/seed_*  (scripts/make_corpus.sh)
+  - cycles/<scene>/noisy with cycles/<scene>/reference (scripts/validation_scenes.sh), and the
+    equal-sample renders cycles/<scene>/spp<N>: the Cycles sample count each method matches
+  - builtin/<scene> (rendered here when missing: the five built-in scenes, 128x128, 8 frames,
+    256-spp references, as scripts/quality_table.sh)
+The method "input" is the noisy frames themselves. Means over a set's sequences; the energy ratio
+is the mean of the sequences' (each the whole sequence's output mean over its reference's), with
+its smallest and largest.
+Environment: RTDENOISE (default build/release/rtdenoise)."""
+import argparse
+import json
+import math
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+BIN = pathlib.Path(os.environ.get("RTDENOISE", ROOT / "build/release/rtdenoise"))
+BUILTIN = ["moving-objects", "camera-pan", "thin-geometry", "switching-light", "reflections"]
+
+
+def run(*args):
+    subprocess.run([str(a) for a in args], check=True, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.PIPE)
+
+
+def score(sequence, reference, method, work):
+    """compare's mean metrics of `method` on `sequence` against `reference`."""
+    out = work / f"{sequence.parent.name}-{sequence.name}-{method}"
+    args = ["--method", method]
+    if method == "input":  # a 0-radius JBF without firefly removal is the identity
+        args = ["--method", "jbf", "--radius", "0", "--no-outlier", "--no-albedo"]
+    run(BIN, "denoise", sequence, "-o", out, "-q", *args)
+    report = out.with_suffix(".json")
+    run(BIN, "compare", out, reference, "--json", report, "-q")
+    return json.loads(report.read_text())["mean"]
+
+
+def relmse_of(folder, reference, work):
+    report = work / f"{folder.parent.name}-{folder.name}.json"
+    run(BIN, "compare", folder, reference, "--json", report, "-q")
+    return json.loads(report.read_text())["mean"]["rel_mse"]
+
+
+def matching_spp(relmse, ladder):
+    """The sample count whose equal-sample render has this relMSE (log-log interpolation over
+    the ladder [(spp, relMSE)]; '<N' or '>N' beyond its ends)."""
+    ladder = sorted(ladder)
+    if not ladder:
+        return "-"
+    if relmse >= ladder[0][1]:
+        return f"<{ladder[0][0]}"
+    if relmse <= ladder[-1][1]:
+        return f">{ladder[-1][0]}"
+    for (s0, e0), (s1, e1) in zip(ladder, ladder[1:]):
+        if e1 <= relmse <= e0:
+            t = (math.log(relmse) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            return f"{math.exp(math.log(s0) + t * (math.log(s1) - math.log(s0))):.0f}"
+    return "-"
+
+
+def fmt(v, spec):
+    return "-" if v is None else format(v, spec)
+
+
+def row(name, method, rows, spp="-"):
+    mean = lambda key: sum(r[key] for r in rows) / len(rows) if all(
+        r[key] is not None for r in rows) else None
+    energies = [r["energy_ratio"] for r in rows if r["energy_ratio"] is not None]
+    energy = (f"{sum(energies) / len(energies):.3f} ({min(energies):.3f}-{max(energies):.3f})"
+              if energies else "-")
+    return (f"| {name} | {method} | {len(rows)} | {fmt(mean('rel_mse'), '.4f')} | "
+            f"{fmt(mean('psnr'), '.2f')} | {fmt(mean('ssim'), '.3f')} | "
+            f"{fmt(mean('temporal_error'), '.4f')} | {energy} | {spp} |")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--corpus", default=ROOT / "cache/corpus", type=pathlib.Path)
+    parser.add_argument("--cycles", default=ROOT / "cache/validation_scenes", type=pathlib.Path)
+    parser.add_argument("--builtin", default=ROOT / "cache/builtin", type=pathlib.Path)
+    parser.add_argument("--methods", default="input,svgf,detail")
+    parser.add_argument("--train-limit", type=int, default=0,
+                        help="score only the first N train sequences (0: all)")
+    options = parser.parse_args()
+    methods = options.methods.split(",")
+    print("| set | method | sequences | relMSE | PSNR (dB) | SSIM | temporal error | "
+          "energy ratio (min-max) | matches spp |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        work = pathlib.Path(tmp)
+        sets = []
+        for name in ("validation", "train"):
+            seeds = sorted((options.corpus / name).glob("seed_*"),
+                           key=lambda p: int(p.name.split("_")[1]))
+            seeds = [s for s in seeds if (s / "complete").exists()]
+            if name == "train" and options.train_limit:
+                seeds = seeds[: options.train_limit]
+            if seeds:
+                sets.append((f"generated {name}", [(s, s / "reference") for s in seeds], None))
+            else:
+                print(f"(no generated {name} set in {options.corpus})", file=sys.stderr)
+        for scene in sorted(p for p in options.cycles.glob("*") if (p / "noisy").is_dir()):
+            ladder = [(int(p.name[3:]), relmse_of(p, scene / "reference", work))
+                      for p in sorted(scene.glob("spp*")) if p.name[3:].isdigit()]
+            sets.append((f"Cycles {scene.name}", [(scene / "noisy", scene / "reference")], ladder))
+        if not options.cycles.is_dir():
+            print(f"(no Cycles scenes in {options.cycles})", file=sys.stderr)
+        for scene in BUILTIN:
+            folder = options.builtin / scene
+            if not (folder / "reference").is_dir():
+                run(BIN, "render", scene, "-o", folder, "--width", 128, "--height", 128,
+                    "--frames", 8, "--ref-spp", 256, "-q")
+            sets.append((f"built-in {scene}", [(folder, folder / "reference")], None))
+        for name, sequences, ladder in sets:
+            for method in methods:
+                rows = [score(seq, ref, method, work) for seq, ref in sequences]
+                spp = matching_spp(rows[0]["rel_mse"], ladder) if ladder else "-"
+                print(row(name, method, rows, spp), flush=True)
+
+
+if __name__ == "__main__":
+    main()
