@@ -10,7 +10,8 @@ set, with relMSE, PSNR, SSIM, temporal error and the energy ratio, and the train
 Sets (each skipped, saying so, where its folder is missing):
   - corpus/validation/seed_*  and  corpus/train/seed_*  (scripts/make_corpus.sh)
   - cycles/<scene>/noisy with cycles/<scene>/reference (scripts/validation_scenes.sh), and the
-    equal-sample renders cycles/<scene>/spp<N>: the Cycles sample count each method matches
+    equal-sample renders cycles/<scene>/results/spp<N>: the Cycles sample count each method
+    matches
   - builtin/<scene> (rendered here when missing: the five built-in scenes, 128x128, 8 frames,
     256-spp references, as scripts/quality_table.sh)
 The method "input" is the noisy frames themselves. Means over a set's sequences; the energy ratio
@@ -113,8 +114,9 @@ def main():
             else:
                 print(f"(no generated {name} set in {options.corpus})", file=sys.stderr)
         for scene in sorted(p for p in options.cycles.glob("*") if (p / "noisy").is_dir()):
+            # results/spp<N>: the equal-sample renders named as compare reads results.
             ladder = [(int(p.name[3:]), relmse_of(p, scene / "reference", work))
-                      for p in sorted(scene.glob("spp*")) if p.name[3:].isdigit()]
+                      for p in sorted((scene / "results").glob("spp*")) if p.name[3:].isdigit()]
             sets.append((f"Cycles {scene.name}", [(scene / "noisy", scene / "reference")], ladder))
         if not options.cycles.is_dir():
             print(f"(no Cycles scenes in {options.cycles})", file=sys.stderr)
