@@ -48,7 +48,7 @@ import bmesh
 import bpy
 from mathutils import Matrix, Vector
 
-VERSION = "validation-scenes 1"
+VERSION = "validation-scenes 2"
 SCENES = ("indirect-room", "texture-gallery", "small-lights", "light-switch")
 SEED_OFFSETS = {"noisy": 0, "reference": 1000}  # sppN: N; distinct seeds, independent noise
 
@@ -615,7 +615,7 @@ def scene_light_switch(first, last):
     keyed_emission_strength(ceiling_emission, [(f, 12.0 if on else 0.0) for f, on in ceiling_keys])
     constant_keys(lamp.data, "energy", [(f, 180.0 if on else 0.0) for f, on in lamp_keys])
     keyed_emission_strength(shade_emission, [(f, 6.0 if on else 0.0) for f, on in lamp_keys])
-    world((0.25, 0.35, 0.6), 0.8)
+    world((0.25, 0.35, 0.6), 3.0)
     cam = camera((-2.2, -2.6, 1.4), (82, 0, -28), lens=24)
     camera_move(cam, first, last, move=(0.03, 0.06, 0), turn_deg=(0, 0, 1.2))
     return cam, [], {"ceilingLight": ceiling_keys, "floorLamp": lamp_keys}
