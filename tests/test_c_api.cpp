@@ -48,6 +48,18 @@ std::vector<float> flat(const Matrix4& matrix) {
     return m;
 }
 
+// Binds frame f's colour, G-buffer and IDs (no albedo, no matrices) and `output` on `d`.
+void bindWithoutMatrices(RTDDenoiser d, const Frame& f, std::vector<float>& output) {
+    const std::size_t w = std::size_t(f.width()), h = std::size_t(f.height());
+    output.assign(3 * w * h, 0.0f);
+    rtdSetImage(d, "color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(d, "normal", f.normal.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(d, "position", f.position.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    rtdSetImage(d, "depth", f.depth.pixels.data(), RTD_FORMAT_FLOAT, w, h, 0, 0);
+    rtdSetImage(d, "ids", f.objectId.data(), RTD_FORMAT_INT, w, h, 0, 0);
+    rtdSetImage(d, "output", output.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+}
+
 class CApi : public ::testing::Test {
   protected:
     static void SetUpTestSuite() { frames_ = renderSmallSequence("moving-objects", 64, 48, 4); }
@@ -443,14 +455,8 @@ TEST_F(CApi, CallsInTheWrongOrder) {
 TEST_F(CApi, AtrousNeedsNoMatrices) {
     const Frame& f = frames_[0];
     RTDDenoiser atrous = rtdNewDenoiser(device_, "atrous");
-    const std::size_t w = 64, h = 48;
-    std::vector<float> out(3 * w * h);
-    rtdSetImage(atrous, "color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
-    rtdSetImage(atrous, "normal", f.normal.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
-    rtdSetImage(atrous, "position", f.position.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
-    rtdSetImage(atrous, "depth", f.depth.pixels.data(), RTD_FORMAT_FLOAT, w, h, 0, 0);
-    rtdSetImage(atrous, "ids", f.objectId.data(), RTD_FORMAT_INT, w, h, 0, 0);
-    rtdSetImage(atrous, "output", out.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    std::vector<float> out;
+    bindWithoutMatrices(atrous, f, out);
     ASSERT_EQ(rtdSetObjectCount(atrous, int(f.objectToWorld.size())), RTD_ERROR_NONE);
     ASSERT_EQ(rtdExecute(atrous), RTD_ERROR_NONE) << takeError(device_).message;
     Frame withoutAlbedo = f;
@@ -706,14 +712,8 @@ double peakResidentMiB() {
 TEST_F(CApi, AnObjectCountCostsNothingWithoutMatrices) {
     const Frame& f = frames_[0];
     RTDDenoiser jbf = rtdNewDenoiser(device_, "jbf");
-    const std::size_t w = 64, h = 48;
-    std::vector<float> out(3 * w * h);
-    rtdSetImage(jbf, "color", f.beauty.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
-    rtdSetImage(jbf, "normal", f.normal.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
-    rtdSetImage(jbf, "position", f.position.pixels.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
-    rtdSetImage(jbf, "depth", f.depth.pixels.data(), RTD_FORMAT_FLOAT, w, h, 0, 0);
-    rtdSetImage(jbf, "ids", f.objectId.data(), RTD_FORMAT_INT, w, h, 0, 0);
-    rtdSetImage(jbf, "output", out.data(), RTD_FORMAT_FLOAT3, w, h, 0, 0);
+    std::vector<float> out;
+    bindWithoutMatrices(jbf, f, out);
     ASSERT_EQ(rtdSetObjectCount(jbf, 30000000), RTD_ERROR_NONE);
     const double before = peakResidentMiB();
     ASSERT_EQ(rtdExecute(jbf), RTD_ERROR_NONE) << takeError(device_).message;

@@ -364,24 +364,27 @@ struct Bsdf {
     }
     // D G2 / (4 cos_o cos_i) with height-correlated G2 = 1 / (1 + Lambda_o + Lambda_i); 0 when
     // either direction is below the surface.
-    float ggxValue(Vec3 wi) const {
-        Vec3 l = toLocal(wi);
-        if (!(woLocal.z > 0.0f) || !(l.z > 0.0f)) return 0.0f;
-        Vec3 h = woLocal + l;
-        float len = length(h);
-        if (!(len > 0.0f)) return 0.0f;
+    // The half vector of wo and l (local), or false where either is below the surface or they
+    // are opposite: then the lobe's value and pdf are 0.
+    bool ggxHalfVector(Vec3 l, Vec3& h) const {
+        if (!(woLocal.z > 0.0f) || !(l.z > 0.0f)) return false;
+        h = woLocal + l;
+        const float len = length(h);
+        if (!(len > 0.0f)) return false;
         h = h / len;
+        return true;
+    }
+    float ggxValue(Vec3 wi) const {
+        const Vec3 l = toLocal(wi);
+        Vec3 h;
+        if (!ggxHalfVector(l, h)) return 0.0f;
         return ggxDistribution(h) /
                (4.0f * woLocal.z * l.z * (1.0f + ggxLambda(alpha, woLocal) + ggxLambda(alpha, l)));
     }
     // Of sampling visible normals: G1(wo) D(h) / (4 cos_o).
     float ggxPdf(Vec3 wi) const {
-        Vec3 l = toLocal(wi);
-        if (!(woLocal.z > 0.0f) || !(l.z > 0.0f)) return 0.0f;
-        Vec3 h = woLocal + l;
-        float len = length(h);
-        if (!(len > 0.0f)) return 0.0f;
-        h = h / len;
+        Vec3 h;
+        if (!ggxHalfVector(toLocal(wi), h)) return 0.0f;
         return ggxDistribution(h) / (4.0f * woLocal.z * (1.0f + ggxLambda(alpha, woLocal)));
     }
     // Visible-normal sampling (Heitz 2018): for the single-scattering lobe alone f cos / pdf =
