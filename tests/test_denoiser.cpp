@@ -158,6 +158,9 @@ TEST(Denoiser, WithoutObjectSeparationObjectsMixButBackgroundStaysOut) {
         DenoiserSettings s = settingsFor(method);
         s.edges.sigmaColor = 100.0f;
         s.edges.separateObjects = false;
+        // The filter alone: the energy restoration's tile gain would lift object 0 by the light
+        // object 1's blue took from its tile.
+        s.energy.keep = false;
         Denoiser denoiser(s);
         Image out = denoiser.processFrame(frame);
         for (int y = 0; y < d.height; ++y) {
@@ -243,6 +246,7 @@ TEST(Denoiser, JbfEqualsTheFormulaEvaluatedDirectly) {
     s.jbf.sigmaCoord = 4.0f;
     s.edges.sigmaNormal = 0.3f;
     s.edges.sigmaPlane = 0.3f;
+    s.energy.keep = false;  // the filter alone
     Denoiser denoiser(s);
     Image out = denoiser.processFrame(frame);
     for (int y = 0; y < d.height; y += 3)
@@ -263,6 +267,7 @@ DenoiserSettings pureHistorySettings() {
     s.outlier.enabled = false;
     s.temporal.alpha = 0.0f;
     s.temporal.clampK = 1e6f;
+    s.energy.keep = false;  // its gain would scale the history's pixels
     return s;
 }
 
@@ -450,13 +455,13 @@ TEST(Denoiser, PassesAreListedWithTheirBuffers) {
     Denoiser temporal(settingsFor(Method::Temporal));
     std::vector<std::string> names;
     for (const PassInfo& p : temporal.passes()) names.push_back(p.name);
-    std::vector<std::string> expected{"ingest",  "outlier", "atrous0", "atrous1",
-                                      "atrous2", "atrous3", "atrous4", "temporal"};
+    std::vector<std::string> expected{"ingest",  "energy-input", "outlier", "atrous0", "atrous1",
+                                      "atrous2", "atrous3",      "atrous4", "temporal", "energy"};
     EXPECT_EQ(names, expected);
     // The last level writes `filtered`, which the temporal stage reads with the last frame's
-    // history; it writes this frame's history and the output.
-    EXPECT_EQ(temporal.passes()[6].outputs, (std::vector<std::string>{"filtered"}));
-    const PassInfo& stage = temporal.passes()[7];
+    // history; it writes this frame's history and the output, which the energy pass scales.
+    EXPECT_EQ(temporal.passes()[7].outputs, (std::vector<std::string>{"filtered"}));
+    const PassInfo& stage = temporal.passes()[8];
     for (const char* input : {"previous guide", "previous history", "matrices", "filtered"})
         EXPECT_NE(std::find(stage.inputs.begin(), stage.inputs.end(), input), stage.inputs.end())
             << input;

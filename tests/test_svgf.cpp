@@ -277,8 +277,10 @@ TEST(Svgf, FeedbackFromTheLastIterationGivesTheSameFrameAndItsOwnHistory) {
     Denoiser a(fused), b(separate);
     Image first = a.processFrame(frame), second = b.processFrame(frame);
     ASSERT_FALSE(b.passes().empty());
-    EXPECT_EQ(b.passes().back().name, "modulate");
-    EXPECT_EQ(a.passes().back().name, "svgf-atrous4");
+    ASSERT_GE(a.passes().size(), 2u);
+    EXPECT_EQ(b.passes()[b.passes().size() - 2].name, "modulate");
+    EXPECT_EQ(a.passes()[a.passes().size() - 2].name, "svgf-atrous4");
+    EXPECT_EQ(a.passes().back().name, "energy");
     double differs = 0.0;
     for (std::size_t k = 0; k < first.pixels.size(); ++k)
         ASSERT_NEAR(second.pixels[k], first.pixels[k], 1e-6f * std::fabs(first.pixels[k]) + 1e-9f);

@@ -524,6 +524,12 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
         ->capture_default_str();
     c.add_option("--outlier-k", s.outlier.k, "[>0] luminance clamp: mean + k stddev")
         ->capture_default_str();
+    c.add_flag("--energy,!--no-energy", s.energy.keep,
+               "Give back the light the robust steps discard, per 16x16 tile, from the noisy "
+               "input's mean (on by default)");
+    c.add_option("--energy-cap", s.energy.cap,
+                 "[>=1] input samples above cap x the local output mean count as that much")
+        ->capture_default_str();
 }
 
 Command addDenoiseCommand(CLI::App& app) {

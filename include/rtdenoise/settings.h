@@ -56,6 +56,15 @@ struct OutlierSettings {
     float k = 2.0f;       // [>0] luminance is clamped to mean + k * stddev of the window
 };
 
+// The energy restoration (every method, last): the light the robust steps discard (firefly
+// removal, history clamps, luminance edge-stopping) is given back at a coarse scale, per 16x16
+// tile, from the noisy input's mean over the frames (docs/energy.md).
+struct EnergySettings {
+    bool keep = true;     // scale the output so that each tile keeps the input's light
+    float cap = 128.0f;   // [>=1] input samples above cap x the local output mean count as
+                          // that much (a lone firefly cannot brighten its tiles)
+};
+
 // Which previous-frame pixels may serve as history (temporal and svgf methods).
 struct HistorySettings {
     bool geometryTests = true;      // also require depth and normal to agree (else: object ID only)
@@ -131,6 +140,7 @@ struct DenoiserSettings {
     JbfSettings jbf;
     AtrousSettings atrous;
     OutlierSettings outlier;
+    EnergySettings energy;
     TemporalSettings temporal;
     HistorySettings history;
     MotionSettings motion;

@@ -776,7 +776,8 @@ def render_kind(scene, scene_dir, kind, args, info, info_path):
     scene.cycles.seed = seed
     folder = os.path.join(scene_dir, kind)
     old = info["renders"].get(kind)
-    if old and old.get("spp") != spp and any(f.endswith(".exr") for f in os.listdir(folder)):
+    if old and old.get("spp") != spp and os.path.isdir(folder) \
+            and any(f.endswith(".exr") for f in os.listdir(folder)):
         sys.exit(f"{folder}: rendered at {old.get('spp')} spp, now {spp}: choose another "
                  "OUT_DIR or delete that folder")
     tmp_dir = os.path.join(scene_dir, "tmp")

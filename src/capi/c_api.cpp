@@ -200,6 +200,8 @@ const SettingEntry kSettings[] = {
     RTD_SETTING("outlier", Bool, outlier.enabled),
     RTD_SETTING("outlier-radius", Int, outlier.radius),
     RTD_SETTING("outlier-k", Float, outlier.k),
+    RTD_SETTING("energy", Bool, energy.keep),
+    RTD_SETTING("energy-cap", Float, energy.cap),
 };
 #undef RTD_SETTING
 

@@ -8,6 +8,7 @@
 #include "kernels/atrous.h"
 #include "kernels/convert.h"
 #include "kernels/detail.h"
+#include "kernels/energy.h"
 #include "kernels/ingest.h"
 #include "kernels/jbf.h"
 #include "kernels/modulate.h"
@@ -35,6 +36,8 @@ enum class StepKind {
     DetailStabilise,
     AddToOutput,
     Modulate,
+    EnergyInput,
+    Energy,
 };
 
 // The frame's buffers into the device's images. Its guide (normal + depth, 4 planes) may be
@@ -160,6 +163,20 @@ struct DetailClampStep {
 
 struct ModulateStep {
     ModulateKernel modulate;
+};
+
+// The input's luminance for the energy restoration, after the ingest.
+struct EnergyInputStep {
+    EnergyInputKernel input;
+};
+
+// The energy restoration of the output (kernels/energy.h): three kernels over the tile grid
+// (grid.across x grid.down items), then one over the pixels.
+struct EnergyStep {
+    EnergyOutputSumsKernel sums;
+    EnergyAccumulateKernel accumulate;
+    EnergyGainKernel gain;
+    EnergyApplyKernel apply;
 };
 
 // The same fields in another form of a kernel family (forms differ in template flags only).

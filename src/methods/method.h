@@ -20,6 +20,7 @@ struct FrameImages {
     ResourceId inputFlags;  // bytes, unpadded: IngestKernel::inputFlags
     ResourceId windowSums;  // 7 planes: window statistics of the firefly removal and clamps
     ResourceId motion;      // temporal methods, 3 planes: MotionIngestKernel's (frames with motion)
+    ResourceId energyInput;  // 1 plane: the input's luminance (EnergySettings::keep)
 };
 
 // What the frames give beyond the required buffers, where it changes the passes.

@@ -23,8 +23,10 @@ int windowReach(int radius) {
 
 }  // namespace
 
-FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings,
-                          const MethodInputs& inputs) {
+namespace {
+
+FrameImages declareMethodPasses(Pipeline& pipeline, const DenoiserSettings& settings,
+                                const MethodInputs& inputs) {
     switch (settings.method) {
         case Method::Jbf:
             return declareJbf(pipeline, settings);
@@ -38,6 +40,47 @@ FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings,
             return declareDetail(pipeline, settings, inputs);
     }
     throw Error(ErrorCode::InvalidArgument, "settings: unknown method");
+}
+
+// The energy restoration of the output, last (kernels/energy.h). Its tile arrays live in
+// unpadded one-plane images (a tile's arrays need far fewer floats than its 256 pixels).
+void declareEnergy(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f) {
+    if (!settings.energy.keep) return;
+    // The tiles' average spans up to 4 frames: longer ones lag behind a method whose loss falls
+    // as its history grows (chosen on the train set, docs/energy.md).
+    constexpr float kEnergyFrames = 4.0f;
+    ResourceId tiles = p.declare({.name = "energyTiles", .padded = false});
+    ResourceId history =
+        p.declare({.name = "energyHistory", .lifetime = Lifetime::History, .padded = false});
+    const int temporal = usesHistory(settings.method) ? 1 : 0;
+    const float cap = settings.energy.cap;
+    p.addPass(
+        "energy", StepKind::Energy,
+        {p.frame(), f.energyInput, f.filterKeys, p.output(), previous(history)},
+        {tiles, history, p.output()}, 0, [=](const PassContext& c) {
+            const Layout& L = c.layout();
+            // Images under 4 pixels have no room for the arrays (and no tile to speak of).
+            if (4 * energyTilesAcross(L.width) * energyTilesAcross(L.height) > L.width * L.height)
+                return;
+            EnergyGrid grid{energyTilesAcross(L.width), energyTilesAcross(L.height),
+                            c.floats(tiles), c.floats(history), c.floats(previous(history))};
+            const std::int32_t* keys = c.ints(f.filterKeys);
+            float* out = c.output();
+            c.device().run(EnergyStep{{L, keys, out, grid},
+                                      {L, keys, out, c.floats(f.energyInput), c.frame().confidence,
+                                       grid, temporal, c.frame().hasHistory, kEnergyFrames, cap},
+                                      {grid},
+                                      {L, keys, out, grid}});
+        });
+}
+
+}  // namespace
+
+FrameImages declareMethod(Pipeline& pipeline, const DenoiserSettings& settings,
+                          const MethodInputs& inputs) {
+    FrameImages f = declareMethodPasses(pipeline, settings, inputs);
+    declareEnergy(pipeline, settings, f);
+    return f;
 }
 
 ResourceDecl floatImage(std::string name, int planes, Lifetime lifetime) {
@@ -152,6 +195,15 @@ FrameImages declareIngest(Pipeline& p, const DenoiserSettings& settings) {
                                             motion,
                                             hasMotion});
               });
+    if (settings.energy.keep) {
+        f.energyInput = p.declare(floatImage("energyInput", 1));
+        p.addPass(
+            "energy-input", StepKind::EnergyInput, {f.noisy, f.albedo}, {f.energyInput}, 0,
+            [f](const PassContext& c) {
+                c.device().run(EnergyInputStep{
+                    {c.layout(), c.planes(f.noisy), c.planes(f.albedo), c.floats(f.energyInput)}});
+            });
+    }
     return f;
 }
 

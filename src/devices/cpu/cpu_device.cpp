@@ -145,6 +145,14 @@ class CpuDevice final : public Device {
     void run(const DetailStabiliseStep& s) override { launch(s.stabilise); }
     void run(const AddToOutputStep& s) override { launchWhereKeyed(s.add, s.add.key); }
     void run(const ModulateStep& s) override { launch(s.modulate); }
+    void run(const EnergyInputStep& s) override { launch(s.input); }
+    void run(const EnergyStep& s) override {
+        const int across = s.gain.grid.across, down = s.gain.grid.down;
+        kernels_.runEnergyOutputSumsKernel(s.sums, across, down, scratch_);
+        kernels_.runEnergyAccumulateKernel(s.accumulate, across, down, scratch_);
+        kernels_.runEnergyGainKernel(s.gain, across, down, scratch_);
+        launch(s.apply);
+    }
 
     void* allocate(std::size_t bytes) override {
         // 64-byte alignment: whole cache lines, aligned vector loads.

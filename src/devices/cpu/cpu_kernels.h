@@ -74,7 +74,12 @@ namespace rtd {
     X(DetailHistoryFixWhereKeyedKernel)           \
     X(ColorRowSumsWhereKeyedKernel)               \
     X(LuminanceRowSumsWhereKeyedKernel)           \
-    X(ModulateKernel)
+    X(ModulateKernel)                             \
+    X(EnergyInputKernel)                          \
+    X(EnergyOutputSumsKernel)                     \
+    X(EnergyAccumulateKernel)                     \
+    X(EnergyGainKernel)                           \
+    X(EnergyApplyKernel)
 
 // One entry per kernel: runs it over a width x height grid of pixels on all cores, with the
 // device's scratch memory.

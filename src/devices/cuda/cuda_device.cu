@@ -341,6 +341,15 @@ class CudaDevice final : public Device {
     void run(const DetailStabiliseStep& s) override { launch(s.stabilise); }
     void run(const AddToOutputStep& s) override { launch(s.add); }
     void run(const ModulateStep& s) override { launch(s.modulate); }
+    void run(const EnergyInputStep& s) override { launch(s.input); }
+    void run(const EnergyStep& s) override {
+        const int across = s.gain.grid.across, down = s.gain.grid.down;
+        launchAny(s.sums, across, down);
+        launchAny(s.accumulate, across, down);
+        launchAny(s.gain, across, down);
+        check(cudaGetLastError(), "kernel launch");
+        launch(s.apply);
+    }
 
     void* allocate(std::size_t bytes) override {
         void* p = nullptr;

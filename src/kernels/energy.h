@@ -1,0 +1,212 @@
+// The energy restoration (issue 38, docs/energy.md): every robust step of a method (the firefly
+// removal, the history clamps, the luminance edge-stopping) discards some of the bright tail of
+// 1-spp noise, and that tail carries much of indirect light, so the output is darker than the
+// reference. This last pass gives the light back at a coarse scale: per 16x16 tile, the mean of
+// the noisy input (its firefly samples capped at `cap` times the tiles' output mean) over the mean
+// of the output, both averaged over the frames (an exponential average of the tile's sums) and
+// over the 3x3 neighbouring tiles, scales the output (interpolated bilinearly between tile
+// centres). The scale is smooth across the image: structure, edges and noise are the method's.
+// Pixels brighter than the cap (lights seen directly) are neither counted nor scaled.
+//
+// One kernel reads the input after the ingest; three run over the tile grid (one item per tile)
+// and one over the pixels at the end:
+//   EnergyInput ... EnergyOutputSums -> EnergyAccumulate -> EnergyGain -> EnergyApply
+// Tile data lives in one unpadded float image (index: plane-like blocks of `tiles` floats).
+#pragma once
+
+#include "kernels/convert.h"
+#include "kernels/views.h"
+
+namespace rtd {
+
+inline constexpr int kEnergyTile = 16;  // pixels per tile side
+
+// The tile grid of a width x height image and where each of its arrays lies.
+struct EnergyGrid {
+    int across = 0, down = 0;
+    // Frame arrays (EnergyOutputSums, EnergyGain): 4 x tiles floats.
+    float* frame = nullptr;
+    // History (EnergyAccumulate): 3 x tiles floats, this frame's and last frame's.
+    float* history = nullptr;
+    const float* previousHistory = nullptr;
+
+    RTD_HOST_DEVICE RTD_INLINE int tiles() const { return across * down; }
+    RTD_HOST_DEVICE RTD_INLINE int tile(int tx, int ty) const { return ty * across + tx; }
+    // frame: output luminance sum, foreground count, gain, bright threshold
+    RTD_HOST_DEVICE RTD_INLINE float& outputSum(int t) const { return frame[t]; }
+    RTD_HOST_DEVICE RTD_INLINE float& count(int t) const { return frame[tiles() + t]; }
+    RTD_HOST_DEVICE RTD_INLINE float& gain(int t) const { return frame[2 * tiles() + t]; }
+    RTD_HOST_DEVICE RTD_INLINE float& threshold(int t) const { return frame[3 * tiles() + t]; }
+    // history: averaged input sum, averaged output sum, frames averaged
+    RTD_HOST_DEVICE RTD_INLINE float& input(int t) const { return history[t]; }
+    RTD_HOST_DEVICE RTD_INLINE float& output(int t) const { return history[tiles() + t]; }
+    RTD_HOST_DEVICE RTD_INLINE float& frames(int t) const { return history[2 * tiles() + t]; }
+    RTD_HOST_DEVICE RTD_INLINE float previousInput(int t) const { return previousHistory[t]; }
+    RTD_HOST_DEVICE RTD_INLINE float previousOutput(int t) const {
+        return previousHistory[tiles() + t];
+    }
+    RTD_HOST_DEVICE RTD_INLINE float previousFrames(int t) const {
+        return previousHistory[2 * tiles() + t];
+    }
+};
+
+RTD_HOST_DEVICE RTD_INLINE int energyTilesAcross(int width) {
+    return (width + kEnergyTile - 1) / kEnergyTile;
+}
+
+// The caller's interleaved output at pixel (x, y).
+RTD_HOST_DEVICE RTD_INLINE Float3 loadInterleaved(const float* rgb, int width, int x, int y) {
+    const PixelIndex s = PixelIndex(y) * width + x;
+    return {rgb[3 * s], rgb[3 * s + 1], rgb[3 * s + 2]};
+}
+
+// Per pixel, right after the ingest (before any step changes its images, or the output overwrites
+// a caller's input in place): the input radiance's luminance, noisy x albedo.
+struct EnergyInputKernel {
+    Layout layout;
+    Planes3 noisy, albedo;
+    float* inputLuminance;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const PixelIndex i = layout.index(x, y);
+        inputLuminance[i] = luminance(noisy.load(i) * albedo.load(i));
+    }
+};
+
+// Per tile: the output's luminance sum and count over foreground pixels.
+struct EnergyOutputSumsKernel {
+    Layout layout;
+    const std::int32_t* filterKey;
+    const float* rgbOut;
+    EnergyGrid grid;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int tx, int ty) const {
+        float sum = 0.0f, count = 0.0f;
+        const int x1 = mini(tx * kEnergyTile + kEnergyTile, layout.width);
+        const int y1 = mini(ty * kEnergyTile + kEnergyTile, layout.height);
+        for (int y = ty * kEnergyTile; y < y1; ++y)
+            for (int x = tx * kEnergyTile; x < x1; ++x) {
+                const bool foreground = filterKey[layout.index(x, y)] >= 0;
+                const float out =
+                    maxf(luminance(loadInterleaved(rgbOut, layout.width, x, y)), 0.0f);
+                sum += foreground ? out : 0.0f;
+                count += foreground ? 1.0f : 0.0f;
+            }
+        const int t = grid.tile(tx, ty);
+        grid.outputSum(t) = sum;
+        grid.count(t) = count;
+    }
+};
+
+// Per tile: the cap (`cap` times the output mean of the 3x3 tiles around), the capped input's and
+// the output's sums over pixels under it, averaged with the tile's history (1 / frames, at least
+// 1 / maxFrames; temporal 0 or no history: this frame alone).
+struct EnergyAccumulateKernel {
+    Layout layout;
+    const std::int32_t* filterKey;
+    const float* rgbOut;
+    const float* inputLuminance;  // EnergyInputKernel's
+    InputSpan confidence;         // the caller's history confidence (data null: none)
+    EnergyGrid grid;
+    int temporal = 0;  // 1: average over frames (temporal methods)
+    int hasHistory = 0;
+    float maxFrames = 32.0f;
+    float capScale = 128.0f;  // EnergySettings::cap
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int tx, int ty) const {
+        float sum = 0.0f, count = 0.0f;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int ux = tx + dx, uy = ty + dy;
+                const bool inside = ux >= 0 && uy >= 0 && ux < grid.across && uy < grid.down;
+                const int u = grid.tile(inside ? ux : tx, inside ? uy : ty);
+                sum += inside ? grid.outputSum(u) : 0.0f;
+                count += inside ? grid.count(u) : 0.0f;
+            }
+        const float cap = capScale * sum / maxf(count, 1.0f);
+        float input = 0.0f, output = 0.0f, confident = 0.0f, pixels = 0.0f;
+        const int x1 = mini(tx * kEnergyTile + kEnergyTile, layout.width);
+        const int y1 = mini(ty * kEnergyTile + kEnergyTile, layout.height);
+        for (int y = ty * kEnergyTile; y < y1; ++y)
+            for (int x = tx * kEnergyTile; x < x1; ++x) {
+                const PixelIndex i = layout.index(x, y);
+                const float out =
+                    maxf(luminance(loadInterleaved(rgbOut, layout.width, x, y)), 0.0f);
+                const bool counted = filterKey[i] >= 0 && out <= cap;
+                const float in = clampf(inputLuminance[i], 0.0f, cap);
+                input += counted ? in : 0.0f;
+                output += counted ? out : 0.0f;
+                confident += loadConfidence(confidence, x, y);
+                pixels += 1.0f;
+            }
+        const int t = grid.tile(tx, ty);
+        // The caller's confidence shortens the tile's average as it does the history.
+        const float kept = grid.previousFrames(t) * confident / maxf(pixels, 1.0f);
+        const float frames = temporal && hasHistory ? minf(kept + 1.0f, maxFrames) : 1.0f;
+        const float a = 1.0f / frames;
+        grid.input(t) =
+            frames > 1.0f ? grid.previousInput(t) + a * (input - grid.previousInput(t)) : input;
+        grid.output(t) =
+            frames > 1.0f ? grid.previousOutput(t) + a * (output - grid.previousOutput(t)) : output;
+        grid.frames(t) = frames;
+        grid.threshold(t) = cap;
+    }
+};
+
+// Per tile: the gain, the 3x3 tent-weighted averaged input over output, within [kMin, kMax]
+// (1 where the tiles hold no light).
+struct EnergyGainKernel {
+    static constexpr float kMin = 0.2f, kMax = 5.0f;
+    EnergyGrid grid;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int tx, int ty) const {
+        float input = 0.0f, output = 0.0f;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                // Clamped to the grid: the edge tiles count twice (as an edge-padded tent).
+                const int ux = mini(maxi(tx + dx, 0), grid.across - 1);
+                const int uy = mini(maxi(ty + dy, 0), grid.down - 1);
+                const float w = float((dx == 0 ? 2 : 1) * (dy == 0 ? 2 : 1));
+                input += w * grid.input(grid.tile(ux, uy));
+                output += w * grid.output(grid.tile(ux, uy));
+            }
+        // 1 where the tiles hold no light in the output (nothing to scale).
+        const float gain = output > 1e-20f ? input / output : 1.0f;
+        grid.gain(grid.tile(tx, ty)) = clampf(gain, kMin, kMax);
+    }
+};
+
+// Per pixel: the output times the gain interpolated between the tile centres (foreground pixels
+// under their tile's cap).
+struct EnergyApplyKernel {
+    Layout layout;
+    const std::int32_t* filterKey;
+    float* rgbOut;
+    EnergyGrid grid;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
+        const float fx = (float(x) + 0.5f) / float(kEnergyTile) - 0.5f;
+        const float fy = (float(y) + 0.5f) / float(kEnergyTile) - 0.5f;
+        const int x0 = mini(int(fx + 1.0f) - 1 < 0 ? 0 : int(fx + 1.0f) - 1, grid.across - 1);
+        const int y0 = mini(int(fy + 1.0f) - 1 < 0 ? 0 : int(fy + 1.0f) - 1, grid.down - 1);
+        const int x1 = mini(x0 + 1, grid.across - 1), y1 = mini(y0 + 1, grid.down - 1);
+        const float wx = clampf(fx - float(x0), 0.0f, 1.0f);
+        const float wy = clampf(fy - float(y0), 0.0f, 1.0f);
+        const float top = grid.gain(grid.tile(x0, y0)) +
+                          wx * (grid.gain(grid.tile(x1, y0)) - grid.gain(grid.tile(x0, y0)));
+        const float bottom = grid.gain(grid.tile(x0, y1)) +
+                             wx * (grid.gain(grid.tile(x1, y1)) - grid.gain(grid.tile(x0, y1)));
+        const float gain = top + wy * (bottom - top);
+        const PixelIndex s = PixelIndex(y) * layout.width + x;
+        const Float3 c = {rgbOut[3 * s], rgbOut[3 * s + 1], rgbOut[3 * s + 2]};
+        const bool scaled =
+            filterKey[layout.index(x, y)] >= 0 &&
+            luminance(c) <= grid.threshold(grid.tile(x / kEnergyTile, y / kEnergyTile));
+        const float k = scaled ? gain : 1.0f;
+        rgbOut[3 * s] = c.x * k;
+        rgbOut[3 * s + 1] = c.y * k;
+        rgbOut[3 * s + 2] = c.z * k;
+    }
+};
+
+}  // namespace rtd
