@@ -158,11 +158,13 @@ TEST(BadValues, FireflyClampWorksAtAnyMagnitude) {
         Denoiser denoiser(s);
         return denoiser.processFrame(f).at(16, 16, 0);
     };
-    const float ratioSmall = fireflyAfterClamp(1e3f) / 1e3f;
-    EXPECT_LT(ratioSmall, 0.5f);  // the clamp acts
-    for (float value : {1e8f, 1e12f, 1e15f}) {
+    // On the flat 0.5 wall the window less the firefly has no spread: it comes out at the wall's
+    // level (the energy restoration's lift aside). Far above the others, the float sums keep
+    // their rounding of it: a looser limit, still under 1e-3 of it.
+    EXPECT_NEAR(fireflyAfterClamp(1e3f), 0.5f, 0.1f);
+    for (float value : {1e5f, 1e8f, 1e12f, 1e15f}) {
         const float ratio = fireflyAfterClamp(value) / value;
-        EXPECT_NEAR(ratio, ratioSmall, 0.01f * ratioSmall) << value;
+        EXPECT_LT(ratio, 1e-3f) << value;
     }
     for (float value : {1e19f, 1e30f, FLT_MAX}) {
         const float out = fireflyAfterClamp(value);

@@ -24,7 +24,7 @@ inline constexpr int kEnergyTile = 16;  // pixels per tile side
 // The tile grid of a width x height image and where each of its arrays lies.
 struct EnergyGrid {
     int across = 0, down = 0;
-    // Frame arrays (EnergyOutputSums, EnergyGain): 4 x tiles floats.
+    // Frame arrays (EnergyOutputSums, EnergyAccumulate, EnergyGain): 5 x tiles floats.
     float* frame = nullptr;
     // History (EnergyAccumulate): 3 x tiles floats, this frame's and last frame's.
     float* history = nullptr;
@@ -32,11 +32,12 @@ struct EnergyGrid {
 
     RTD_HOST_DEVICE RTD_INLINE int tiles() const { return across * down; }
     RTD_HOST_DEVICE RTD_INLINE int tile(int tx, int ty) const { return ty * across + tx; }
-    // frame: output luminance sum, foreground count, gain, bright threshold
+    // frame: output luminance sum, foreground count, gain, bright threshold, input luminance sum
     RTD_HOST_DEVICE RTD_INLINE float& outputSum(int t) const { return frame[t]; }
     RTD_HOST_DEVICE RTD_INLINE float& count(int t) const { return frame[tiles() + t]; }
     RTD_HOST_DEVICE RTD_INLINE float& gain(int t) const { return frame[2 * tiles() + t]; }
     RTD_HOST_DEVICE RTD_INLINE float& threshold(int t) const { return frame[3 * tiles() + t]; }
+    RTD_HOST_DEVICE RTD_INLINE float& inputSum(int t) const { return frame[4 * tiles() + t]; }
     // history: averaged input sum, averaged output sum, frames averaged
     RTD_HOST_DEVICE RTD_INLINE float& input(int t) const { return history[t]; }
     RTD_HOST_DEVICE RTD_INLINE float& output(int t) const { return history[tiles() + t]; }
@@ -73,15 +74,16 @@ struct EnergyInputKernel {
     }
 };
 
-// Per tile: the output's luminance sum and count over foreground pixels.
+// Per tile: the output's and the input's luminance sums and the count over foreground pixels.
 struct EnergyOutputSumsKernel {
     Layout layout;
     const std::int32_t* filterKey;
     const float* rgbOut;
+    const float* inputLuminance;  // EnergyInputKernel's
     EnergyGrid grid;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int tx, int ty) const {
-        float sum = 0.0f, count = 0.0f;
+        float sum = 0.0f, count = 0.0f, input = 0.0f;
         const int x1 = mini(tx * kEnergyTile + kEnergyTile, layout.width);
         const int y1 = mini(ty * kEnergyTile + kEnergyTile, layout.height);
         for (int y = ty * kEnergyTile; y < y1; ++y)
@@ -90,17 +92,19 @@ struct EnergyOutputSumsKernel {
                 const float out =
                     maxf(luminance(loadInterleaved(rgbOut, layout.width, x, y)), 0.0f);
                 sum += foreground ? out : 0.0f;
+                input += foreground ? maxf(inputLuminance[layout.index(x, y)], 0.0f) : 0.0f;
                 count += foreground ? 1.0f : 0.0f;
             }
         const int t = grid.tile(tx, ty);
         grid.outputSum(t) = sum;
         grid.count(t) = count;
+        grid.inputSum(t) = input;
     }
 };
 
-// Per tile: the cap (`cap` times the output mean of the 3x3 tiles around), the capped input's and
-// the output's sums over pixels under it, averaged with the tile's history (1 / frames, at least
-// 1 / maxFrames; temporal 0 or no history: this frame alone).
+// Per tile: the cap (`cap` times the input's or output's mean over the 3x3 tiles around), the
+// capped input's and the output's sums over pixels under it, averaged with the tile's history (1 /
+// frames, at least 1 / maxFrames; temporal 0 or no history: this frame alone).
 struct EnergyAccumulateKernel {
     Layout layout;
     const std::int32_t* filterKey;
@@ -114,7 +118,7 @@ struct EnergyAccumulateKernel {
     float capScale = 128.0f;  // EnergySettings::cap
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int tx, int ty) const {
-        float sum = 0.0f, count = 0.0f;
+        float sum = 0.0f, count = 0.0f, inputSum = 0.0f;
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
                 const int ux = tx + dx, uy = ty + dy;
@@ -122,8 +126,16 @@ struct EnergyAccumulateKernel {
                 const int u = grid.tile(inside ? ux : tx, inside ? uy : ty);
                 sum += inside ? grid.outputSum(u) : 0.0f;
                 count += inside ? grid.count(u) : 0.0f;
+                inputSum += inside ? grid.inputSum(u) : 0.0f;
             }
-        const float cap = capScale * sum / maxf(count, 1.0f);
+        // One sample's sway is bounded alike whatever the average's length: the cap grows with
+        // the frames the tile has averaged (a firefly in a first frame counts a quarter as much).
+        const int t = grid.tile(tx, ty);
+        const float averaged =
+            temporal && hasHistory ? minf(grid.previousFrames(t) + 1.0f, maxFrames) : 1.0f;
+        // The larger of the input's and the output's means: the output's alone is as low as the
+        // method's loss, which would cap the light that restores it.
+        const float cap = capScale * averaged / maxFrames * maxf(sum, inputSum) / maxf(count, 1.0f);
         float input = 0.0f, output = 0.0f, confident = 0.0f, pixels = 0.0f;
         const int x1 = mini(tx * kEnergyTile + kEnergyTile, layout.width);
         const int y1 = mini(ty * kEnergyTile + kEnergyTile, layout.height);
@@ -139,7 +151,6 @@ struct EnergyAccumulateKernel {
                 confident += loadConfidence(confidence, x, y);
                 pixels += 1.0f;
             }
-        const int t = grid.tile(tx, ty);
         // The caller's confidence shortens the tile's average as it does the history.
         const float kept = grid.previousFrames(t) * confident / maxf(pixels, 1.0f);
         const float frames = temporal && hasHistory ? minf(kept + 1.0f, maxFrames) : 1.0f;

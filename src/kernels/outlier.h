@@ -1,5 +1,6 @@
 // Firefly removal (shared/seeds/002): a pixel's luminance is clamped to mean + k * stddev of the
-// luminance of the object pixels in its (2r+1)^2 window; the colour is scaled, keeping its hue.
+// luminance of the other object pixels in its (2r+1)^2 window; the colour is scaled, keeping its
+// hue.
 // Background passes through. Runs after LuminanceRowSumsKernel (the column half of the window).
 #pragma once
 
@@ -7,17 +8,21 @@
 
 namespace rtd {
 
-// Colour c with its luminance clamped to mean + k * stddev of its window's luminance (the window's
-// object pixels: their count, sum and sum of squares), its hue kept. Background keeps its value
-// (its window statistics are not its own).
+// Colour c with its luminance clamped to mean + k * stddev of the luminance of the other object
+// pixels of its window (their count, sum and sum of squares: the window's less c's own), its hue
+// kept. Leaving the pixel out matters: with it, a lone bright pixel widens its own limit to about
+// (1 + k sqrt(n - 1)) / n of itself (0.31 for a 7x7 window, k 2) and survives. Where it dominates
+// the float sums, the differences keep their rounding of it: a looser limit, still far below it,
+// and finite. Background, and a pixel with no other object pixel around, keep their value.
 RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, float count, float sum,
                                             float sumSquares, float k) {
-    count = maxf(count, 1.0f);
-    float mean = sum / count;
-    float variance = maxf(sumSquares / count - mean * mean, 0.0f);
-    float limit = mean + k * std::sqrt(variance);
-    float l = luminance(c);
-    float scale = foreground && l > limit && l > 0.0f ? limit / l : 1.0f;
+    const float l = luminance(c);
+    const float others = count - 1.0f;
+    const float n = maxf(others, 1.0f);
+    const float mean = maxf(sum - l, 0.0f) / n;
+    const float variance = maxf(maxf(sumSquares - l * l, 0.0f) / n - mean * mean, 0.0f);
+    const float limit = mean + k * std::sqrt(variance);
+    const float scale = foreground && others >= 0.5f && l > limit && l > 0.0f ? limit / l : 1.0f;
     return c * scale;
 }
 

@@ -59,14 +59,14 @@ void declareEnergy(Pipeline& p, const DenoiserSettings& settings, const FrameIma
         {p.frame(), f.energyInput, f.filterKeys, p.output(), previous(history)},
         {tiles, history, p.output()}, 0, [=](const PassContext& c) {
             const Layout& L = c.layout();
-            // Images under 4 pixels have no room for the arrays (and no tile to speak of).
-            if (4 * energyTilesAcross(L.width) * energyTilesAcross(L.height) > L.width * L.height)
+            // Images under 5 pixels have no room for the arrays (and no tile to speak of).
+            if (5 * energyTilesAcross(L.width) * energyTilesAcross(L.height) > L.width * L.height)
                 return;
             EnergyGrid grid{energyTilesAcross(L.width), energyTilesAcross(L.height),
                             c.floats(tiles), c.floats(history), c.floats(previous(history))};
             const std::int32_t* keys = c.ints(f.filterKeys);
             float* out = c.output();
-            c.device().run(EnergyStep{{L, keys, out, grid},
+            c.device().run(EnergyStep{{L, keys, out, c.floats(f.energyInput), grid},
                                       {L, keys, out, c.floats(f.energyInput), c.frame().confidence,
                                        grid, temporal, c.frame().hasHistory, kEnergyFrames, cap},
                                       {grid},
