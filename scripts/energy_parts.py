@@ -5,17 +5,22 @@ the whole sequence (output mean over reference mean), of 32x32 tiles away from o
 and 95th percentile), relMSE, PSNR and the temporal error.
 
   scripts/energy_parts.py SEQ... [--config NAME:METHOD[:key=value,...]]... [--tile 32] [--json F]
+                          [--cli BIN]
 
 SEQ: a folder with `reference/` (course layout, a generated corpus's sequence) or a Cycles
 validation scene (`noisy/` and `reference/`). Without --config: every method at its defaults.
 Example: --config svgf:svgf --config svgf-no-outlier:svgf:outlier=false
 A tile is kept where at least half its pixels are away (2 px) from an object edge and the
 background, and its reference mean is at least 5 % of the frame's; its ratio sums every frame.
-Needs the Python module (build/py/python on PYTHONPATH) and numpy."""
+Needs the Python module (build/release/python on PYTHONPATH) and numpy. --cli BIN denoises with
+that build's command instead (`rtdenoise denoise`, the settings as its flags): another build's
+figures, e.g. a commit before a change."""
 import argparse
 import json
 import pathlib
+import subprocess
 import sys
+import tempfile
 
 import numpy as np
 
@@ -78,10 +83,28 @@ def tile_sums(image, mask, tile):
     return sums, counts
 
 
-def evaluate(frames, refs, method, settings, tile):
-    den = rtd.Denoiser(method, **settings)
-    outs = [den.denoise(**f.inputs()) for f in frames]
-    den.close()
+def denoise_with_cli(cli, source, method, settings):
+    flags = []
+    for key, value in settings.items():
+        if isinstance(value, bool):
+            flags.append(f"--{key}" if value else f"--no-{key}")
+        else:
+            flags += [f"--{key}", str(value)]
+    with tempfile.TemporaryDirectory() as out:
+        subprocess.run([cli, "denoise", str(source), "-o", out, "-q", "--method", method, *flags],
+                       check=True)
+        results = sorted(pathlib.Path(out).glob("result_*.exr"),
+                         key=lambda p: int(p.stem.split("_")[1]))
+        return [rtd.read_exr(p)[..., :3] for p in results]
+
+
+def evaluate(frames, refs, method, settings, tile, cli=None, source=None):
+    if cli:
+        outs = denoise_with_cli(cli, source, method, settings)
+    else:
+        den = rtd.Denoiser(method, **settings)
+        outs = [den.denoise(**f.inputs()) for f in frames]
+        den.close()
     comparison = rtd.compare(outs, refs)
     frame_metrics = comparison.frames
     out_sum = sum(float(o.sum(dtype=np.float64)) for o in outs)
@@ -115,6 +138,7 @@ def main():
     parser.add_argument("--config", action="append", default=[])
     parser.add_argument("--tile", type=int, default=32)
     parser.add_argument("--json")
+    parser.add_argument("--cli", help="denoise with this build's rtdenoise command")
     args = parser.parse_args()
     configs = [parse_config(c) for c in args.config] or [
         (m, m, {}) for m in ("jbf", "atrous", "temporal", "svgf", "detail")]
@@ -129,7 +153,7 @@ def main():
         if len(refs) != len(frames):
             sys.exit(f"{folder}: {len(frames)} frames, {len(refs)} references")
         for name, method, settings in configs:
-            r = evaluate(frames, refs, method, settings, args.tile)
+            r = evaluate(frames, refs, method, settings, args.tile, args.cli, source)
             results.setdefault(str(folder), {})[name] = r
             print(f"{pathlib.Path(folder).name:<28} {name:<22} {r['energy']:7.3f} "
                   f"{r['tile_p5']:6.3f} {r['tile_p95']:6.3f} {r['rel_mse']:8.4f} "

@@ -16,8 +16,11 @@ Sets (each skipped, saying so, where its folder is missing):
     256-spp references, as scripts/quality_table.sh)
 The method "input" is the noisy frames themselves. Means over a set's sequences; the energy ratio
 is the mean of the sequences' (each the whole sequence's output mean over its reference's), with
-its smallest and largest.
-Environment: RTDENOISE (default build/release/rtdenoise)."""
+its smallest and largest; "tiles 5-95 %" are the 5th and 95th percentiles of the energy ratios of
+32x32 tiles away from object edges (scripts/energy_parts.py's measure: every frame summed), over
+the set's tiles.
+Environment: RTDENOISE (default build/release/rtdenoise); the Python module on PYTHONPATH
+(build/release/python) and numpy for the tiles."""
 import argparse
 import json
 import math
@@ -26,6 +29,11 @@ import pathlib
 import subprocess
 import sys
 import tempfile
+
+import numpy as np
+
+import rtdenoise as rtd
+from energy_parts import edge_mask, tile_sums
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 BIN = pathlib.Path(os.environ.get("RTDENOISE", ROOT / "build/release/rtdenoise"))
@@ -46,7 +54,34 @@ def score(sequence, reference, method, work):
     run(BIN, "denoise", sequence, "-o", out, "-q", *args)
     report = out.with_suffix(".json")
     run(BIN, "compare", out, reference, "--json", report, "-q")
-    return json.loads(report.read_text())["mean"]
+    metrics = json.loads(report.read_text())["mean"]
+    metrics["tiles"] = tile_ratios(sequence, out, reference)
+    return metrics
+
+
+_masks = {}
+
+
+def tile_ratios(sequence, results, reference, tile=32):
+    """The energy ratios of the tiles away from object edges, every frame summed (energy_parts)."""
+    if sequence not in _masks:
+        seq = rtd.open_sequence(sequence)
+        _masks[sequence] = [edge_mask(np.asarray(seq[i].ids)) for i in range(len(seq))]
+    masks = _masks[sequence]
+    outs = sorted(results.glob("result_*.exr"), key=lambda p: int(p.stem.split("_")[1]))
+    refs = sorted(reference.glob("*.exr"), key=lambda p: int(p.stem.split("_")[-1]))
+    so = sr = counts = None
+    ref_total = pixels = 0.0
+    for mask, o, r in zip(masks, outs, refs):
+        out_image, ref_image = rtd.read_exr(o)[..., :3], rtd.read_exr(r)[..., :3]
+        a, c = tile_sums(out_image, mask, tile)
+        b, _ = tile_sums(ref_image, mask, tile)
+        so, sr, counts = (a, b, c) if so is None else (so + a, sr + b, counts + c)
+        ref_total += float(ref_image.mean(axis=2).sum())
+        pixels += mask.size
+    keep = (counts >= 0.5 * len(masks) * tile * tile) & (
+        sr / np.maximum(counts, 1) >= 0.05 * ref_total / pixels)
+    return list((so[keep] / sr[keep]).astype(float))
 
 
 def relmse_of(folder, reference, work):
@@ -82,9 +117,12 @@ def row(name, method, rows, spp="-"):
     energies = [r["energy_ratio"] for r in rows if r["energy_ratio"] is not None]
     energy = (f"{sum(energies) / len(energies):.3f} ({min(energies):.3f}-{max(energies):.3f})"
               if energies else "-")
+    tiles = [t for r in rows for t in r["tiles"]]
+    tile_range = (f"{np.percentile(tiles, 5):.3f}-{np.percentile(tiles, 95):.3f}" if tiles
+                  else "-")
     return (f"| {name} | {method} | {len(rows)} | {fmt(mean('rel_mse'), '.4f')} | "
             f"{fmt(mean('psnr'), '.2f')} | {fmt(mean('ssim'), '.3f')} | "
-            f"{fmt(mean('temporal_error'), '.4f')} | {energy} | {spp} |")
+            f"{fmt(mean('temporal_error'), '.4f')} | {energy} | {tile_range} | {spp} |")
 
 
 def main():
@@ -93,17 +131,20 @@ def main():
     parser.add_argument("--cycles", default=ROOT / "cache/validation_scenes", type=pathlib.Path)
     parser.add_argument("--builtin", default=ROOT / "cache/builtin", type=pathlib.Path)
     parser.add_argument("--methods", default="input,svgf,detail")
+    parser.add_argument("--sets", default="validation,train,cycles,builtin",
+                        help="which sets to score (comma-separated)")
     parser.add_argument("--train-limit", type=int, default=0,
                         help="score only the first N train sequences (0: all)")
     options = parser.parse_args()
     methods = options.methods.split(",")
     print("| set | method | sequences | relMSE | PSNR (dB) | SSIM | temporal error | "
-          "energy ratio (min-max) | matches spp |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "energy ratio (min-max) | tiles 5-95 % | matches spp |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         work = pathlib.Path(tmp)
         sets = []
-        for name in ("validation", "train"):
+        wanted = options.sets.split(",")
+        for name in [n for n in ("validation", "train") if n in wanted]:
             seeds = sorted((options.corpus / name).glob("seed_*"),
                            key=lambda p: int(p.name.split("_")[1]))
             seeds = [s for s in seeds if (s / "complete").exists()]
@@ -113,14 +154,20 @@ def main():
                 sets.append((f"generated {name}", [(s, s / "reference") for s in seeds], None))
             else:
                 print(f"(no generated {name} set in {options.corpus})", file=sys.stderr)
-        for scene in sorted(p for p in options.cycles.glob("*") if (p / "noisy").is_dir()):
+        cycles = sorted(p for p in options.cycles.glob("*") if (p / "noisy").is_dir())
+        for scene in cycles if "cycles" in wanted else []:
+            noisy = len(list((scene / "noisy").glob("*.exr")))
+            if len(list((scene / "reference").glob("*.exr"))) < noisy:
+                print(f"(Cycles {scene.name}: its references are not all rendered; skipped)",
+                      file=sys.stderr)
+                continue
             # results/spp<N>: the equal-sample renders named as compare reads results.
             ladder = [(int(p.name[3:]), relmse_of(p, scene / "reference", work))
                       for p in sorted((scene / "results").glob("spp*")) if p.name[3:].isdigit()]
             sets.append((f"Cycles {scene.name}", [(scene / "noisy", scene / "reference")], ladder))
         if not options.cycles.is_dir():
             print(f"(no Cycles scenes in {options.cycles})", file=sys.stderr)
-        for scene in BUILTIN:
+        for scene in BUILTIN if "builtin" in wanted else []:
             folder = options.builtin / scene
             if not (folder / "reference").is_dir():
                 run(BIN, "render", scene, "-o", folder, "--width", 128, "--height", 128,
