@@ -9,7 +9,8 @@ the 15x15 pixels around it (a blob), and the ratio at that pixel in the next fra
                                                           [--no-energy]
 
 SEQ: a folder with `reference/` (a generated corpus's sequence) or a Cycles validation scene. The
-pixel: the middle one (in raster order) of those at least 6 pixels from an object edge."""
+pixel: the middle one (in raster order) of those at least 6 pixels from an object edge and 8 from
+the frame's border."""
 import argparse
 import pathlib
 import sys
@@ -33,7 +34,10 @@ def main():
     seq = rtd.open_sequence(source)
     whens = [int(w) for w in args.frames.split(",")]
     frames = [seq[i] for i in range(min(len(seq), max(whens) + 2))]
-    ys, xs = np.nonzero(edge_mask(np.asarray(frames[0].ids), 6))
+    away = edge_mask(np.asarray(frames[0].ids), 6)
+    away[:8, :] = away[-8:, :] = False  # and from the frame's border
+    away[:, :8] = away[:, -8:] = False
+    ys, xs = np.nonzero(away)
     if len(ys) == 0:
         sys.exit(f"{args.sequence}: no pixel 6 pixels from an object edge")
     y, x = ys[len(ys) // 2], xs[len(xs) // 2]
