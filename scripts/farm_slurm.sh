@@ -9,7 +9,9 @@
 #       frames (default 100) and the final check; --wait waits for the check and exits with its
 #       status. --sbatch: more sbatch options for every task ("--partition=gpu --gres=gpu:1
 #       --cpus-per-task=8"); each task's OpenMP threads follow --cpus-per-task.
-#   scripts/farm_slurm.sh --check OUT        what the final task runs (exit 1 naming what is missing)
+#   scripts/farm_slurm.sh --check OUT [--frames A:B --chunk N]
+#       what the final task runs (exit 1 naming each chunk that is missing frames or did not
+#       finish); with --frames and --chunk, for a shot another manager ran: result files only
 #   scripts/farm_slurm.sh --resubmit OUT K[,K...] [--wait]
 #                                            reruns those chunks alone, then the check again
 #
@@ -30,15 +32,21 @@ die() {
 
 # ---- the final check: every chunk finished and every frame written ----
 check() {
-  local out=$1 farm=$1/farm
-  [ -f "$farm/chunks.txt" ] || die "$farm/chunks.txt: no such file: submit the shot first"
+  local out=$1 farm=$1/farm rows markers=1
+  if [ -n "${2:-}" ]; then  # the chunks of --frames A:B --chunk N, without Slurm's markers
+    rows=$(chunk_table "$2" "$3")
+    markers=0
+  else
+    [ -f "$farm/chunks.txt" ] || die "$farm/chunks.txt: no such file: submit the shot first"
+    rows=$(cat "$farm/chunks.txt")
+  fi
   local missing_chunks=() k a b n missing_frames
   while read -r k a b; do
     missing_frames=()
     for ((n = a; n < b; n++)); do
       [ -f "$out/result_$n.exr" ] || missing_frames+=("$n")
     done
-    if [ ! -f "$farm/chunk_$k.done" ] || [ ${#missing_frames[@]} -gt 0 ]; then
+    if { [ $markers = 1 ] && [ ! -f "$farm/chunk_$k.done" ]; } || [ ${#missing_frames[@]} -gt 0 ]; then
       missing_chunks+=("$k")
       if [ ${#missing_frames[@]} -gt 0 ]; then
         echo "chunk $k (frames $a:$b): ${#missing_frames[@]} frames missing" \
@@ -48,18 +56,33 @@ check() {
           "its log: $farm/chunk_$k.log"
       fi
     fi
-  done < "$farm/chunks.txt"
+  done <<< "$rows"
   local chunks total
-  chunks=$(wc -l < "$farm/chunks.txt")
-  total=$(awk '{ s += $3 - $2 } END { print s }' "$farm/chunks.txt")
+  chunks=$(wc -l <<< "$rows")
+  total=$(awk '{ s += $3 - $2 } END { print s }' <<< "$rows")
   if [ ${#missing_chunks[@]} -gt 0 ]; then
     local list
     list=$(IFS=,; echo "${missing_chunks[*]}")
     echo "FAILED: ${#missing_chunks[@]} of $chunks chunks incomplete; rerun them alone:"
-    echo "  $(cd "$(dirname "$0")" && pwd)/farm_slurm.sh --resubmit $out $list"
+    if [ $markers = 1 ]; then
+      echo "  $(cd "$(dirname "$0")" && pwd)/farm_slurm.sh --resubmit $out $list"
+    else
+      echo "  (chunks $list, in your manager)"
+    fi
     return 1
   fi
   echo "OK: all $total frames of $chunks chunks written to $out"
+}
+
+# "K A B" per chunk of N frames of A:B (frames A..B-1).
+chunk_table() {
+  local frames=$1 size=$2 a b k=0
+  [[ $frames =~ ^([0-9]+):([0-9]+)$ ]] || die "--frames A:B: the shot's frames A..B-1, got '$frames'"
+  [[ $size =~ ^[1-9][0-9]*$ ]] || die "--chunk $size: give the frames per chunk, 1 or more"
+  for ((a = BASH_REMATCH[1]; a < BASH_REMATCH[2]; a += size, k++)); do
+    b=$((a + size < BASH_REMATCH[2] ? a + size : BASH_REMATCH[2]))
+    echo "$k $a $b"
+  done
 }
 
 # Submits the array tasks `array` ("0-3" or "2,5") of OUT/farm/chunk.sbatch, then the check
@@ -85,8 +108,12 @@ submit() {
 case "${1:-}" in
   -h | --help | "") usage ;;
   --check)
-    [ $# -eq 2 ] || usage
-    check "$2"
+    if [ $# -eq 6 ] && [ "$3" = --frames ] && [ "$5" = --chunk ]; then
+      check "$2" "$4" "$6"
+    else
+      [ $# -eq 2 ] || usage
+      check "$2"
+    fi
     exit
     ;;
   --resubmit)
@@ -149,13 +176,9 @@ warmup_option=()
 
 mkdir -p "$farm"
 rm -f "$farm"/chunk_*.done "$farm/check.log"
-chunks=0
-: > "$farm/chunks.txt.tmp"
-for ((a = first; a < end; a += chunk, chunks++)); do
-  b=$((a + chunk < end ? a + chunk : end))
-  echo "$chunks $a $b" >> "$farm/chunks.txt.tmp"
-done
+chunk_table "$frames" "$chunk" > "$farm/chunks.txt.tmp"
 mv "$farm/chunks.txt.tmp" "$farm/chunks.txt"
+chunks=$(wc -l < "$farm/chunks.txt")
 echo "$sbatch_args" > "$farm/sbatch_args"
 
 # The task scripts: self-contained, so that a chunk can be rerun alone with plain sbatch too.

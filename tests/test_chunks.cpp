@@ -42,61 +42,66 @@ std::vector<std::string> resultNames(int first, int end, const char* extension =
     return names;
 }
 
-// The seam tolerances of docs/farm.md for the default warm-up, measured on the rendered scenes
-// with camera motion and a light switch: the worst frame of any temporal method's chunk against
-// the whole run, times 2. The temporal error is the display-space jump at the join
-// (metrics::temporalError against the whole run), relMSE the linear difference of any frame.
-constexpr double kSeamTemporalError = 2e-3;
-constexpr double kSeamRelMse = 2e-4;
+// docs/farm.md's seam table (2026-12-05): with a warm-up of 16 frames, the worst join of any
+// temporal method on the scenes with camera motion, moving objects and a light switch had a
+// temporal error of 4.6e-3 against the whole run (display space) and a relMSE of 7.1e-4; these
+// bound them. Without a warm-up the joins are several times worse (1.4e-2 to 6.5e-2).
+constexpr double kSeamTemporalErrorW16 = 5e-3;
+constexpr double kSeamRelMseW16 = 1e-3;
 
+// Frames 0..frames-1 of `chunks` against the same frames of `whole`, per frame: relMSE, and the
+// temporal error (0 for frame 0).
 struct Difference {
-    double worstRelMse = 0.0;
-    double worstTemporalError = 0.0;
-    int worstFrame = -1;  // of the temporal error
+    std::vector<double> relMse;
+    std::vector<double> temporalError;
 };
 
-// Frames 0..frames-1 of `chunks` against the same frames of `whole`.
 Difference differenceOf(const fs::path& chunks, const fs::path& whole, int frames) {
     Difference d;
     Image previousChunk, previousWhole;
     for (int i = 0; i < frames; ++i) {
         const std::string name = fmt::format("result_{}.exr", i);
         const Image chunk = readExr(chunks / name, kRgb), reference = readExr(whole / name, kRgb);
-        d.worstRelMse = std::max(d.worstRelMse, metrics::relMse(chunk, reference));
+        d.relMse.push_back(metrics::relMse(chunk, reference));
         const Image chunkDisplay = toneMap(chunk), wholeDisplay = toneMap(reference);
-        if (i > 0) {
-            const double error =
-                metrics::temporalError(chunkDisplay, previousChunk, wholeDisplay, previousWhole);
-            if (error > d.worstTemporalError) {
-                d.worstTemporalError = error;
-                d.worstFrame = i;
-            }
-        }
+        d.temporalError.push_back(i == 0 ? 0.0
+                                         : metrics::temporalError(chunkDisplay, previousChunk,
+                                                                  wholeDisplay, previousWhole));
         previousChunk = chunkDisplay;
         previousWhole = wholeDisplay;
     }
     return d;
 }
 
+double largest(const std::vector<double>& values, std::size_t first, std::size_t end) {
+    return *std::max_element(values.begin() + std::ptrdiff_t(first),
+                             values.begin() + std::ptrdiff_t(end));
+}
+
 // A rendered 48-frame camera pan (camera motion: the history is reprojected at every frame) in
-// 4 chunks of 12 frames into one folder, for every temporal method: the default warm-up makes
-// the joins match the whole run within the tolerances; none makes them differ (the test can
-// fail); and every chunk left the others' files alone.
+// 4 chunks of 12 frames into one folder, for every temporal method:
+//  - the default warm-up (48) reaches frame 0 from every chunk: the results are the whole run's,
+//    bit for bit (and every chunk left the others' files alone);
+//  - a warm-up of 16 starts chunks 2 and 3 mid-shot: their joins are within the measured bounds;
+//  - none (detail): each join is a jump beyond them (the test can fail).
 TEST(Chunks, FourChunksMatchOneRunOverTheRenderedShot) {
     test::TempFolder dir("chunks-rendered");
     const fs::path scene = dir.path() / "scene";
     const test::CliResult render = runCli("render camera-pan -o " + quoted(scene) +
                                           " --width 64 --height 48 --frames 48 --ref-spp 1 -q");
     ASSERT_EQ(render.exitCode, 0) << render.output;
-    for (const char* method : {"temporal", "svgf", "detail"}) {
+    ASSERT_GE(kDefaultChunkWarmup, 36);
+    for (const std::string method : {"temporal", "svgf", "detail"}) {
         SCOPED_TRACE(method);
-        const std::string options = fmt::format(" --method {} --device cpu -q", method);
-        const fs::path whole = dir.path() / fmt::format("whole-{}", method);
+        const std::string options = " --method " + method + " --device cpu -q";
+        const fs::path whole = dir.path() / ("whole-" + method);
         test::CliResult r = runCli("denoise " + quoted(scene) + " -o " + quoted(whole) + options);
         ASSERT_EQ(r.exitCode, 0) << r.output;
-        for (const std::string warmup : {"", " --warmup 0"}) {
+        for (const std::string warmup : {"", " --warmup 16", " --warmup 0"}) {
+            SCOPED_TRACE(warmup);
+            if (warmup == " --warmup 0" && method != "detail") continue;
             const fs::path chunks =
-                dir.path() / fmt::format("chunks-{}{}", method, warmup.empty() ? "" : "-cold");
+                dir.path() / ("chunks-" + method + std::to_string(warmup.size()));
             for (int first = 0; first < 48; first += 12) {
                 r = runCli("denoise " + quoted(scene) + " -o " + quoted(chunks) + options +
                            fmt::format(" --frames {}:{}", first, first + 12) + warmup);
@@ -104,12 +109,21 @@ TEST(Chunks, FourChunksMatchOneRunOverTheRenderedShot) {
             }
             EXPECT_EQ(namesIn(chunks), resultNames(0, 48));
             const Difference d = differenceOf(chunks, whole, 48);
+            // The first chunk starts where the shot does: the whole run's frames exactly.
+            EXPECT_EQ(largest(d.relMse, 0, 12), 0.0);
             if (warmup.empty()) {
-                EXPECT_LE(d.worstTemporalError, kSeamTemporalError) << "frame " << d.worstFrame;
-                EXPECT_LE(d.worstRelMse, kSeamRelMse);
-            } else {  // no warm-up: a join a viewer sees, at a chunk's first frame
-                EXPECT_GT(d.worstTemporalError, 5 * kSeamTemporalError);
-                EXPECT_EQ(d.worstFrame % 12, 0) << d.worstFrame;
+                EXPECT_EQ(largest(d.relMse, 0, 48), 0.0);
+                EXPECT_EQ(largest(d.temporalError, 0, 48), 0.0);
+                continue;
+            }
+            for (std::size_t join : {12u, 24u, 36u}) {
+                SCOPED_TRACE(join);
+                if (warmup == " --warmup 16") {
+                    EXPECT_LE(largest(d.temporalError, join, join + 12), kSeamTemporalErrorW16);
+                    EXPECT_LE(largest(d.relMse, join, join + 12), kSeamRelMseW16);
+                } else {  // no warm-up: a join a viewer sees
+                    EXPECT_GT(largest(d.temporalError, join, join + 2), 2 * kSeamTemporalErrorW16);
+                }
             }
         }
     }
@@ -170,7 +184,7 @@ TEST(Chunks, ChunksUseTheInputsFrameNumbersAndBadRangesFailFirst) {
     const fs::path blender = fs::path(RTD_SOURCE_DIR) / "tests/data/blender/noisy";
     const fs::path out = dir.path() / "out";
     test::CliResult r = runCli("denoise " + quoted(blender) + " -o " + quoted(out) +
-                               " --method svgf --device cpu --frames 3:5 --warmup 1");
+                               " --method svgf --device cpu --frames 3..4 --warmup 1");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_EQ(namesIn(out), (std::vector<std::string>{"result_3.exr", "result_4.exr"}));
     EXPECT_TRUE(contains(r.output, "frames 3..4 (2 frames, after 1 warm-up frames not written)"))

@@ -107,28 +107,36 @@ std::variant<int, std::string> frameNumberOf(std::string_view text, std::string_
     return int(value);
 }
 
-// --frames N or A:B (or A: to the end), or an explanation of the mistake.
+// --frames N, A:B (A..B-1; A: to the end) or A..B (A..B inclusive: Blender's and the farm
+// managers' notation), or an explanation of the mistake.
 std::variant<FrameSelection, std::string> parseFrameSelection(const std::string& text) {
     FrameSelection selection;
+    const std::size_t dots = text.find("..");
     const std::size_t colon = text.find(':');
-    if (colon == std::string::npos) {
-        auto count = frameNumberOf(text, "a frame count, 0 for all frames, or A:B");
+    if (colon == std::string::npos && dots == std::string::npos) {
+        auto count = frameNumberOf(text, "a frame count, 0 for all frames, A:B or A..B");
         if (auto* error = std::get_if<std::string>(&count)) return *error;
         selection.count = std::get<int>(count);
         return selection;
     }
+    const bool inclusive = colon == std::string::npos;
+    const std::size_t split = inclusive ? dots : colon;
+    const std::size_t endStart = split + (inclusive ? 2 : 1);
     selection.chunk = true;
-    auto first =
-        frameNumberOf(std::string_view(text).substr(0, colon), "A of A:B: the first frame");
+    auto first = frameNumberOf(std::string_view(text).substr(0, split), "the chunk's first frame");
     if (auto* error = std::get_if<std::string>(&first)) return *error;
     selection.first = std::get<int>(first);
-    if (colon + 1 < text.size()) {
-        auto end = frameNumberOf(std::string_view(text).substr(colon + 1),
-                                 "B of A:B: the frame after the last");
+    if (endStart < text.size() || inclusive) {
+        auto end = frameNumberOf(
+            std::string_view(text).substr(endStart),
+            inclusive ? "B of A..B: the last frame" : "B of A:B: the frame after the last");
         if (auto* error = std::get_if<std::string>(&end)) return *error;
-        selection.end = std::get<int>(end);
+        selection.end = std::get<int>(end) + (inclusive ? 1 : 0);
         if (*selection.end <= selection.first)
-            return fmt::format("{}: the chunk is empty (A:B denoises frames A..B-1)", text);
+            return fmt::format(
+                "{}: the chunk is empty (A:B denoises frames A..B-1, A..B frames "
+                "A to B)",
+                text);
     }
     return selection;
 }
@@ -141,7 +149,7 @@ CLI::Validator frameSelectionValidator() {
             if (auto* error = std::get_if<std::string>(&parsed)) return *error;
             return {};
         },
-        "N|A:B");
+        "N|A:B|A..B");
 }
 
 double median(std::vector<double> v) {
@@ -695,8 +703,9 @@ Command addDenoiseCommand(CLI::App& app) {
                 "svgf also variance_<i>.png (luminance stddev) and history_<i>.png (length / cap)");
     c->add_option("--frames", options->frames,
                   "N: only the first N frames (0: all). A:B: a chunk of the shot, the input's "
-                  "frame numbers A..B-1 (A: to the end), written as result_<number>; the "
-                  "--warmup frames before A are denoised first for their history, not written")
+                  "frame numbers A..B-1 (A: to the end; A..B: A to B inclusive, as Blender "
+                  "writes ranges), written as result_<number>; the --warmup frames before A "
+                  "are denoised first for their history, not written")
         ->check(frameSelectionValidator());
     c->add_option_function<int>(
          "--warmup",

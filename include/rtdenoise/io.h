@@ -233,7 +233,7 @@ std::unique_ptr<FrameSource> openFrameSource(const std::filesystem::path& input,
 
 // The warm-up a chunk runs before its first frame when none is given: the frames whose history
 // makes a chunk's first frame match a run over the whole shot (docs/farm.md, measured).
-constexpr int kDefaultChunkWarmup = 16;
+constexpr int kDefaultChunkWarmup = 48;
 
 // A chunk of a sequence as frame indices (0..frameCount()-1): frames warmupIndex..firstIndex-1
 // are denoised for their history only, firstIndex..endIndex-1 are the chunk's results.
