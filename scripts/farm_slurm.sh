@@ -76,11 +76,12 @@ check() {
 
 # "K A B" per chunk of N frames of A:B (frames A..B-1).
 chunk_table() {
-  local frames=$1 size=$2 a b k=0
+  local frames=$1 size=$2 first end a b k=0
   [[ $frames =~ ^([0-9]+):([0-9]+)$ ]] || die "--frames A:B: the shot's frames A..B-1, got '$frames'"
+  first=${BASH_REMATCH[1]} end=${BASH_REMATCH[2]}
   [[ $size =~ ^[1-9][0-9]*$ ]] || die "--chunk $size: give the frames per chunk, 1 or more"
-  for ((a = BASH_REMATCH[1]; a < BASH_REMATCH[2]; a += size, k++)); do
-    b=$((a + size < BASH_REMATCH[2] ? a + size : BASH_REMATCH[2]))
+  for ((a = first; a < end; a += size, k++)); do
+    b=$((a + size < end ? a + size : end))
     echo "$k $a $b"
   done
 }
