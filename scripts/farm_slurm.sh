@@ -192,6 +192,8 @@ echo "$sbatch_args" > "$farm/sbatch_args"
   echo "rm -f $(printf %q "$farm")/chunk_\$k.done"
   echo "export OMP_NUM_THREADS=\${SLURM_CPUS_PER_TASK:-\${OMP_NUM_THREADS:-}}"
   echo "[ -n \"\$OMP_NUM_THREADS\" ] || unset OMP_NUM_THREADS"
+  # $a and $b are the task's own variables, expanded when it runs.
+  # shellcheck disable=SC2016
   printf '%q denoise %q -o %q --frames "$a:$b"' "$rtdenoise" "$input" "$out"
   for option in "${warmup_option[@]}" "${denoise_options[@]}"; do printf ' %q' "$option"; done
   echo
