@@ -41,8 +41,8 @@ struct DenoiseOptions {
     fs::path config;
     int fps = 24;
     float exposure = 1.0f;
-    // --frames: N (the first N frames; 0: all) or A:B (the input's frame numbers A..B-1, a chunk
-    // of a shot run after `warmup` frames that only build its history).
+    // --frames: N (the first N frames; 0: all) or A:B, A:, A..B (a chunk of the input's frame
+    // numbers, run after `warmup` frames that only build its history; parseFrameSelection).
     std::string frames;
     int warmup = kDefaultChunkWarmup;  // [>=0] frames denoised before A and not written
     bool warmupGiven = false;
@@ -133,15 +133,13 @@ std::variant<FrameSelection, std::string> parseFrameSelection(const std::string&
         if (auto* error = std::get_if<std::string>(&end)) return *error;
         selection.end = std::get<int>(end) + (inclusive ? 1 : 0);
         if (*selection.end <= selection.first)
-            return fmt::format(
-                "{}: the chunk is empty (A:B denoises frames A..B-1, A..B frames "
-                "A to B)",
-                text);
+            return fmt::format("{}: the chunk is empty (A:B is frames A..B-1, A..B frames A to B)",
+                               text);
     }
     return selection;
 }
 
-// --frames: N, A:B or A: (checked when the option is read, before anything else happens).
+// --frames: N, A:B, A: or A..B (checked when the option is read, before anything else).
 CLI::Validator frameSelectionValidator() {
     return CLI::Validator(
         [](std::string& text) -> std::string {
