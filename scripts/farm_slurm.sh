@@ -50,7 +50,7 @@ check() {
       missing_chunks+=("$k")
       if [ ${#missing_frames[@]} -gt 0 ]; then
         echo "chunk $k (frames $a:$b): ${#missing_frames[@]} frames missing" \
-          "(result_${missing_frames[0]}.exr ...); its log: $farm/chunk_$k.log"
+          "(result_${missing_frames[0]}.exr ...)$([ $markers = 1 ] && echo "; its log: $farm/chunk_$k.log")"
       else
         echo "chunk $k (frames $a:$b): did not finish (no $farm/chunk_$k.done);" \
           "its log: $farm/chunk_$k.log"
@@ -156,16 +156,18 @@ first=${BASH_REMATCH[1]} end=${BASH_REMATCH[2]}
 [[ $chunk =~ ^[1-9][0-9]*$ ]] || die "--chunk $chunk: give the frames per chunk, 1 or more"
 [ -z "$warmup" ] || [[ $warmup =~ ^[0-9]+$ ]] || die "--warmup $warmup: give a frame count"
 command -v sbatch > /dev/null || die "sbatch not found: run this on a Slurm submit host"
+scontrol ping > /dev/null 2>&1 ||
+  die "no Slurm controller answers (scontrol ping): run this on a submit host, or set SLURM_CONF"
 if [ -z "$rtdenoise" ]; then
   rtdenoise=$(command -v rtdenoise || true)
   here=$(cd "$(dirname "$0")/.." && pwd)
   [ -n "$rtdenoise" ] || rtdenoise="$here/build/release/rtdenoise"
 fi
 [ -x "$rtdenoise" ] || die "$rtdenoise: not an executable (give --rtdenoise PATH)"
-rtdenoise=$(cd "$(dirname "$rtdenoise")" && pwd)/$(basename "$rtdenoise")
-input=$(cd "$(dirname "$input")" && pwd)/$(basename "$input")
-mkdir -p "$out"
-out=$(cd "$out" && pwd)
+# Absolute paths, for tasks that start elsewhere; nothing is created before the checks below.
+rtdenoise=$(realpath -m "$rtdenoise")
+input=$(realpath -m "$input")
+out=$(realpath -m "$out")
 farm=$out/farm
 
 warmup_option=()
