@@ -6,9 +6,10 @@
 #   scripts/farm_slurm.sh INPUT -o OUT --frames A:B [--chunk N] [--warmup W] [--rtdenoise PATH]
 #                         [--sbatch "ARGS"] [--wait] [-- DENOISE_OPTIONS...]
 #       submits the shot (frames A..B-1, the input's numbers) as ceil((B-A)/N) chunks of N
-#       frames (default 100) and the final check; --wait waits for the check and exits with its
-#       status. --sbatch: more sbatch options for every task ("--partition=gpu --gres=gpu:1
-#       --cpus-per-task=8"); each task's OpenMP threads follow --cpus-per-task.
+#       frames (default 200: the default warm-up of 48 frames adds 24 %) and the final check;
+#       --wait waits for the check and exits with its status. --sbatch: more sbatch options for
+#       every task ("--partition=gpu --gres=gpu:1 --cpus-per-task=8"); each task's OpenMP
+#       threads follow --cpus-per-task.
 #   scripts/farm_slurm.sh --check OUT [--frames A:B --chunk N]
 #       what the final task runs (exit 1 naming each chunk that is missing frames or did not
 #       finish); with --frames and --chunk, for a shot another manager ran: result files only
@@ -21,9 +22,10 @@
 # written to a temporary name and renamed, so none is ever half-written).
 set -euo pipefail
 
+# The usage lines of the header above; exits with $1 (2: a mistake, 0: --help).
 usage() {
-  sed -n '5,15p' "$0" | sed 's/^# \{0,1\}//' >&2
-  exit 2
+  sed -n '6,17p' "$0" | sed 's/^# \{0,1\}//' >&2
+  exit "${1:-2}"
 }
 die() {
   echo "farm_slurm: $*" >&2
@@ -107,7 +109,8 @@ submit() {
 }
 
 case "${1:-}" in
-  -h | --help | "") usage ;;
+  -h | --help) usage 0 ;;
+  "") usage ;;
   --check)
     if [ $# -eq 6 ] && [ "$3" = --frames ] && [ "$5" = --chunk ]; then
       check "$2" "$4" "$6"
@@ -134,7 +137,7 @@ esac
 
 input=$1
 shift
-out="" frames="" chunk=100 warmup="" rtdenoise="" sbatch_args="" wait=""
+out="" frames="" chunk=200 warmup="" rtdenoise="" sbatch_args="" wait=""
 denoise_options=()
 while [ $# -gt 0 ]; do
   case "$1" in
