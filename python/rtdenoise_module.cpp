@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -326,6 +327,12 @@ class FrameSourceHandle {
     std::vector<std::string> warnings() const { return source_->warnings(); }
     std::string backProjectionProblem() const { return source_->backProjectionProblem(); }
     std::filesystem::path frameFile(int index) const { return source_->frameFile(index); }
+    int firstFrameNumber() const { return source_->firstFrameNumber(); }
+    // (warm-up, first, end) frame indices of the chunk of frame numbers first..end-1.
+    std::tuple<int, int, int> chunk(int firstNumber, int endNumber, int warmup) const {
+        const rtd::FrameChunk chunk = rtd::chunkOf(*source_, firstNumber, endNumber, warmup);
+        return {chunk.warmupIndex, chunk.firstIndex, chunk.endIndex};
+    }
 
   private:
     std::unique_ptr<rtd::FrameSource> source_;
@@ -493,7 +500,10 @@ PYBIND11_MODULE(_rtdenoise, module) {
         .def("describe", &FrameSourceHandle::describe)
         .def("warnings", &FrameSourceHandle::warnings)
         .def("back_projection_problem", &FrameSourceHandle::backProjectionProblem)
-        .def("frame_file", &FrameSourceHandle::frameFile);
+        .def("frame_file", &FrameSourceHandle::frameFile)
+        .def("first_frame_number", &FrameSourceHandle::firstFrameNumber)
+        .def("chunk", &FrameSourceHandle::chunk);
+    module.attr("DEFAULT_CHUNK_WARMUP") = rtd::kDefaultChunkWarmup;
 
     module.def("read_exr", &readExr, py::arg("path"), py::arg("channels") = py::none());
     module.def("write_exr", &writeExr, py::arg("path"), py::arg("array"), py::arg("half"),

@@ -610,10 +610,10 @@ TEST_F(CApi, ErrorsReachTheCallbackAndTheFirstIsKept) {
 TEST_F(CApi, SettingsHaveTheCommandLinesNames) {
     CliResult help = runCli("denoise --help");
     ASSERT_EQ(help.exitCode, 0) << help.output;
-    const std::set<std::string> notSettings = {"help",  "config",      "view-layer",  "output",
-                                               "png",   "compression", "half",        "exposure",
-                                               "video", "fps",         "debug",       "frames",
-                                               "quiet", "device",      "motion-scale"};
+    const std::set<std::string> notSettings = {
+        "help",  "config",   "view-layer",   "output", "png",    "compression",
+        "half",  "exposure", "video",        "fps",    "debug",  "frames",
+        "quiet", "device",   "motion-scale", "warmup", "dry-run"};
     std::regex option(R"(--([a-z][a-z0-9-]+))");
     int checked = 0;
     for (std::sregex_iterator it(help.output.begin(), help.output.end(), option), end; it != end;

@@ -16,7 +16,9 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "commands.h"
@@ -39,7 +41,12 @@ struct DenoiseOptions {
     fs::path config;
     int fps = 24;
     float exposure = 1.0f;
-    int maxFrames = 0;
+    // --frames: N (the first N frames; 0: all) or A:B, A:, A..B (a chunk of the input's frame
+    // numbers, run after `warmup` frames that only build its history; parseFrameSelection).
+    std::string frames;
+    int warmup = kDefaultChunkWarmup;  // [>=0] frames denoised before A and not written
+    bool warmupGiven = false;
+    bool dryRun = false;  // check everything, print what would be denoised, create nothing
     bool quiet = false;
     ExrWriteOptions exr;  // result_<i>.exr's compression and channel type
 };
@@ -80,19 +87,67 @@ void addChoice(CLI::App& c, const std::string& name, Enum& target,
         ->option_text(fmt::format("{} (default {})", names, toString(target)));
 }
 
-// --frames N: a whole number >= 0 (CLI11's NonNegativeNumber names DBL_MAX in its message).
-CLI::Validator frameCountValidator() {
+// What --frames selects: the first `count` frames (0: all), or a chunk of the input's frame
+// numbers first..end-1 (end absent: to the last frame).
+struct FrameSelection {
+    int count = 0;
+    bool chunk = false;
+    int first = 0;
+    std::optional<int> end;
+};
+
+// A whole number in 0..1000000000, or an explanation of why `text` is not one.
+std::variant<int, std::string> frameNumberOf(std::string_view text, std::string_view what) {
+    long long value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+        return fmt::format("'{}' is not a whole number ({})", text, what);
+    if (value < 0) return fmt::format("{} is negative ({})", text, what);
+    if (value > 1000000000) return fmt::format("{} is out of range: at most 1000000000", text);
+    return int(value);
+}
+
+// --frames N, A:B (A..B-1; A: to the end) or A..B (A..B inclusive: Blender's and the farm
+// managers' notation), or an explanation of the mistake.
+std::variant<FrameSelection, std::string> parseFrameSelection(const std::string& text) {
+    FrameSelection selection;
+    const std::size_t dots = text.find("..");
+    const std::size_t colon = text.find(':');
+    if (colon == std::string::npos && dots == std::string::npos) {
+        auto count = frameNumberOf(text, "a frame count, 0 for all frames, A:B or A..B");
+        if (auto* error = std::get_if<std::string>(&count)) return *error;
+        selection.count = std::get<int>(count);
+        return selection;
+    }
+    const bool inclusive = colon == std::string::npos;
+    const std::size_t split = inclusive ? dots : colon;
+    const std::size_t endStart = split + (inclusive ? 2 : 1);
+    selection.chunk = true;
+    auto first = frameNumberOf(std::string_view(text).substr(0, split), "the chunk's first frame");
+    if (auto* error = std::get_if<std::string>(&first)) return *error;
+    selection.first = std::get<int>(first);
+    if (endStart < text.size() || inclusive) {
+        auto end = frameNumberOf(
+            std::string_view(text).substr(endStart),
+            inclusive ? "B of A..B: the last frame" : "B of A:B: the frame after the last");
+        if (auto* error = std::get_if<std::string>(&end)) return *error;
+        selection.end = std::get<int>(end) + (inclusive ? 1 : 0);
+        if (*selection.end <= selection.first)
+            return fmt::format("{}: the chunk is empty (A:B is frames A..B-1, A..B frames A to B)",
+                               text);
+    }
+    return selection;
+}
+
+// --frames: N, A:B, A: or A..B (checked when the option is read, before anything else).
+CLI::Validator frameSelectionValidator() {
     return CLI::Validator(
         [](std::string& text) -> std::string {
-            long long value = 0;
-            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-            if (ec != std::errc() || end != text.data() + text.size())
-                return "'" + text + "' is not a whole number of frames";
-            if (value < 0) return text + " is negative: give a frame count, 0 for all frames";
-            if (value > 1000000000) return text + " is out of range: at most 1000000000 frames";
+            auto parsed = parseFrameSelection(text);
+            if (auto* error = std::get_if<std::string>(&parsed)) return *error;
             return {};
         },
-        "N>=0");
+        "N|A:B|A..B");
 }
 
 double median(std::vector<double> v) {
@@ -126,16 +181,26 @@ void checkVideoPath(const DenoiseOptions& options) {
 
 // A folder holds one run: this program's outputs that this run does not rewrite are removed, so
 // a shorter or different run leaves nothing of an earlier one for `compare` to score with it.
+// A chunk's run (--frames A:B) owns only its frames' numbers: the kinds of file it does not
+// write are removed there, and the other chunks' files are left alone.
 void removeEarlierOutputs(const DenoiseOptions& options, const DenoiserSettings& settings,
-                          int frames) {
+                          int frames, std::optional<std::pair<int, int>> chunkNumbers) {
     const bool history = usesHistory(settings.method);
     const bool svgfViews = settings.method == Method::Svgf || settings.method == Method::Detail;
-    const auto keep = [frames](bool written) { return written ? frames : 0; };
-    removeNumberedFiles(options.output, "result", ".exr", frames);
-    removeNumberedFiles(options.output, "result", ".png", keep(options.png));
-    removeNumberedFiles(options.output, "reprojection", ".png", keep(options.debug && history));
-    removeNumberedFiles(options.output, "variance", ".png", keep(options.debug && svgfViews));
-    removeNumberedFiles(options.output, "history", ".png", keep(options.debug && svgfViews));
+    const auto remove = [&](std::string_view stem, std::string_view extension, bool written) {
+        if (chunkNumbers) {
+            if (!written)
+                removeNumberedFiles(options.output, stem, extension, chunkNumbers->first,
+                                    chunkNumbers->second);
+        } else {
+            removeNumberedFiles(options.output, stem, extension, written ? frames : 0);
+        }
+    };
+    remove("result", ".exr", true);
+    remove("result", ".png", options.png);
+    remove("reprojection", ".png", options.debug && history);
+    remove("variance", ".png", options.debug && svgfViews);
+    remove("history", ".png", options.debug && svgfViews);
 }
 
 // What the ingest repaired, per frame: (frame, count) where the count is not 0.
@@ -222,37 +287,90 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         throw Error(ErrorCode::InvalidInput,
                     fmt::format("{} (--method {} reprojects the previous frame)",
                                 source->backProjectionProblem(), toString(settings.method)));
-    int frames = source->frameCount();
-    if (options.maxFrames > 0) frames = std::min(frames, options.maxFrames);
-    const std::vector<ExrSize> sizes = source->checkFrames(frames);
-    for (int i = 1; i < frames && !options.video.empty(); ++i)
-        if (sizes[i].width != sizes[0].width || sizes[i].height != sizes[0].height)
+    // The frames read: [chunk.warmupIndex, chunk.endIndex), of which those from
+    // chunk.firstIndex are written, as result_<n> with n the input's number for a chunk.
+    const FrameSelection selection = std::get<FrameSelection>(
+        parseFrameSelection(options.frames.empty() ? "0" : options.frames));
+    if (options.warmupGiven && !selection.chunk)
+        throw Error(ErrorCode::InvalidArgument,
+                    "--warmup is for a chunk of the shot: give --frames A:B with it");
+    FrameChunk chunk{0, 0, source->frameCount()};
+    if (selection.chunk) {
+        try {
+            chunk =
+                chunkOf(*source, selection.first,
+                        selection.end.value_or(source->firstFrameNumber() + source->frameCount()),
+                        options.warmup);
+        } catch (const Error& e) {
+            throw Error(e.code(), fmt::format("--frames {}: {}", options.frames, e.what()));
+        }
+    } else if (selection.count > 0) {
+        chunk.endIndex = std::min(chunk.endIndex, selection.count);
+    }
+    const int frames = chunk.endIndex - chunk.firstIndex;  // written
+    const int framesRead = chunk.endIndex - chunk.warmupIndex;
+    const auto numberOf = [&](int index) {
+        return selection.chunk ? source->firstFrameNumber() + index : index;
+    };
+    // sizes[k]: frame chunk.warmupIndex + k.
+    const std::vector<ExrSize> sizes = source->checkFrames(framesRead, chunk.warmupIndex);
+    const int firstWritten = chunk.firstIndex - chunk.warmupIndex;
+    for (int k = firstWritten + 1; k < framesRead && !options.video.empty(); ++k) {
+        const ExrSize& size = sizes[std::size_t(k)];
+        const ExrSize& firstSize = sizes[std::size_t(firstWritten)];
+        if (size.width != firstSize.width || size.height != firstSize.height)
             throw Error(ErrorCode::InvalidInput,
-                        fmt::format("{}: {}x{}, but frame 0 is {}x{}: a --video needs frames of "
-                                    "one size",
-                                    source->frameFile(i).string(), sizes[i].width, sizes[i].height,
-                                    sizes[0].width, sizes[0].height));
+                        fmt::format("{}: {}x{}, but {} is {}x{}: a --video needs frames of one "
+                                    "size",
+                                    source->frameFile(chunk.warmupIndex + k).string(), size.width,
+                                    size.height, source->frameFile(chunk.firstIndex).string(),
+                                    firstSize.width, firstSize.height));
+    }
     checkOutputFolder(options.output);
     Denoiser denoiser(settings);  // a device that is not there fails here, before any output
+    if (options.dryRun) {
+        // What a farm submission checks before it queues a task per chunk.
+        fmt::print(
+            "would denoise frames {}..{} ({} frames{}) of {} into {}, method {}, device {}\n",
+            numberOf(chunk.firstIndex), numberOf(chunk.endIndex) - 1, frames,
+            chunk.firstIndex > chunk.warmupIndex
+                ? fmt::format(", after {} warm-up frames", chunk.firstIndex - chunk.warmupIndex)
+                : "",
+            source->describe(), options.output.string(), toString(settings.method),
+            denoiser.deviceName());
+        return 0;
+    }
 
     prepareOutputFolder(options.output);
-    removeEarlierOutputs(options, settings, frames);
+    removeEarlierOutputs(options, settings, frames,
+                         selection.chunk ? std::optional(std::pair(numberOf(chunk.firstIndex),
+                                                                   numberOf(chunk.endIndex)))
+                                         : std::nullopt);
     for (const std::string& warning : source->warnings())  // once per run, not per frame
         fmt::print(stderr, "rtdenoise: warning: {}\n", warning);
     // A frame of another size starts afresh (the denoiser's buffers are remade, by design): said
     // at that frame, so that a stray render of another size is not taken for a filter's fault.
-    for (int i = 1; i < frames; ++i)
-        if (sizes[i].width != sizes[i - 1].width || sizes[i].height != sizes[i - 1].height)
+    for (int k = 1; k < framesRead; ++k)
+        if (sizes[k].width != sizes[k - 1].width || sizes[k].height != sizes[k - 1].height)
             fmt::print(
                 stderr, "rtdenoise: warning: {}: {}, but the frame before it is {}: {}\n",
-                source->frameFile(i).string(), sizeText(sizes[i]), sizeText(sizes[i - 1]),
+                source->frameFile(chunk.warmupIndex + k).string(), sizeText(sizes[k]),
+                sizeText(sizes[k - 1]),
                 history ? "the history restarts at this frame" : "its result is of another size");
     if (!options.quiet) {
-        fmt::print(stderr, "rtdenoise: {} frames from {}, method {}, device {}\n", frames,
-                   source->describe(), toString(settings.method), denoiser.deviceName());
+        if (selection.chunk)
+            fmt::print(stderr,
+                       "rtdenoise: frames {}..{} ({} frames, after {} warm-up frames not "
+                       "written) from {}, method {}, device {}\n",
+                       numberOf(chunk.firstIndex), numberOf(chunk.endIndex) - 1, frames,
+                       chunk.firstIndex - chunk.warmupIndex, source->describe(),
+                       toString(settings.method), denoiser.deviceName());
+        else
+            fmt::print(stderr, "rtdenoise: {} frames from {}, method {}, device {}\n", frames,
+                       source->describe(), toString(settings.method), denoiser.deviceName());
     }
     std::optional<VideoWriter> video;
-    Progress progress(frames, options.quiet);
+    Progress progress(framesRead, options.quiet);
 
     using Clock = std::chrono::steady_clock;
     std::vector<std::vector<double>> passTimes(denoiser.passes().size());
@@ -265,7 +383,7 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
     auto readAsync = [&](int i) {
         return std::async(std::launch::async, [&source, i] { return source->readFrame(i); });
     };
-    std::future<Frame> next = readAsync(0);
+    std::future<Frame> next = readAsync(chunk.warmupIndex);
     // Frame i's files are written on another thread while frame i+1 is denoised; two result
     // images alternate so the one being written is never the one being filled.
     Image results[2];
@@ -290,12 +408,12 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
             return std::chrono::duration<double, std::milli>(Clock::now() - writeStart).count();
         });
     };
-    for (int i = 0; i < frames; ++i) {
+    for (int i = chunk.warmupIndex; i < chunk.endIndex; ++i) {
         auto waitStart = Clock::now();
         Frame frame = next.get();
         readWaitTimes.push_back(
             std::chrono::duration<double, std::milli>(Clock::now() - waitStart).count());
-        if (i + 1 < frames) next = readAsync(i + 1);
+        if (i + 1 < chunk.endIndex) next = readAsync(i + 1);
 
         Image& result = results[i % 2];
         auto frameStart = Clock::now();
@@ -305,14 +423,19 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
         const FrameStats& stats = denoiser.lastFrameStats();
         for (std::size_t p = 0; p < passTimes.size(); ++p)
             passTimes[p].push_back(stats.passMilliseconds[p]);
-        if (stats.nonFiniteReplaced > 0) nonFinite.emplace_back(i, stats.nonFiniteReplaced);
-        if (stats.radianceClamped > 0) clamped.emplace_back(i, stats.radianceClamped);
-        if (stats.missingNormals > 0) missingNormals.emplace_back(i, stats.missingNormals);
+        const int number = numberOf(i);
+        if (stats.nonFiniteReplaced > 0) nonFinite.emplace_back(number, stats.nonFiniteReplaced);
+        if (stats.radianceClamped > 0) clamped.emplace_back(number, stats.radianceClamped);
+        if (stats.missingNormals > 0) missingNormals.emplace_back(number, stats.missingNormals);
         if (const std::string broken = rtd::inputWarning(stats); !broken.empty()) {
             if (++framesWithoutGeometry <= kFrameWarningsShown)
                 progress.warn(fmt::format("{}: {} (frame {}; is {} broken?)",
-                                          source->frameFile(i).string(), broken, i,
+                                          source->frameFile(i).string(), broken, number,
                                           brokenPasses(frame, stats)));
+        }
+        if (i < chunk.firstIndex) {  // a warm-up frame: its history is all this run needs of it
+            progress.update(i + 1 - chunk.warmupIndex);
+            continue;
         }
 
         std::vector<std::pair<std::string, Image>> debug;
@@ -324,8 +447,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
             }
         }
         if (writing.valid()) writeTimes.push_back(writing.get());  // in order, one at a time
-        writing = writeAsync(i, result, std::move(debug));
-        progress.update(i + 1);
+        writing = writeAsync(numberOf(i), result, std::move(debug));
+        progress.update(i + 1 - chunk.warmupIndex);
     }
     if (writing.valid()) writeTimes.push_back(writing.get());
     if (video) video->finish();
@@ -350,8 +473,10 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
                                 "object pixels with a zero or NaN/Inf normal (filtered among "
                                 "themselves, without a normal term)"));
     if (!options.quiet) {
-        fmt::print("{} in {:.2f} s ({:.1f} fps overall, I/O included)\n", framesAndSizes(sizes),
-                   total, frames / total);
+        const std::vector<ExrSize> written(sizes.begin() + firstWritten, sizes.end());
+        fmt::print("{}{} in {:.2f} s ({:.1f} fps overall, I/O included)\n", framesAndSizes(written),
+                   firstWritten ? fmt::format(" after {} warm-up frames", firstWritten) : "", total,
+                   framesRead / total);
         fmt::print("denoise  median {:8.2f} ms/frame  (device {})\n", median(frameTimes),
                    denoiser.deviceName());
         for (std::size_t p = 0; p < passTimes.size(); ++p)
@@ -574,8 +699,26 @@ Command addDenoiseCommand(CLI::App& app) {
                 "Write reprojection_<i>.png (history valid green, outside the screen red, other "
                 "object or depth/normal mismatch yellow, background blue, no history black); "
                 "svgf also variance_<i>.png (luminance stddev) and history_<i>.png (length / cap)");
-    c->add_option("--frames", options->maxFrames, "Denoise only the first N frames (0: all)")
-        ->check(frameCountValidator());
+    c->add_option("--frames", options->frames,
+                  "N: only the first N frames (0: all). A:B: a chunk of the shot, the input's "
+                  "frame numbers A..B-1 (A: to the end; A..B: A to B inclusive, as Blender "
+                  "writes ranges), written as result_<number>; the --warmup frames before A "
+                  "are denoised first for their history, not written")
+        ->check(frameSelectionValidator());
+    c->add_option_function<int>(
+         "--warmup",
+         [options](int frames) {
+             options->warmup = frames;
+             options->warmupGiven = true;
+         },
+         fmt::format("[0,1000000] with --frames A:B: frames before A denoised to build the "
+                     "history, not written (default {}: the chunk's results then match a run "
+                     "over the whole shot, docs/farm.md)",
+                     kDefaultChunkWarmup))
+        ->check(CLI::Range(0, 1000000));
+    c->add_flag("--dry-run", options->dryRun,
+                "Check the input's files (headers), the options and the output folder, print "
+                "what would be denoised and exit; creates nothing");
     c->add_flag("-q,--quiet", options->quiet, "No progress or summary");
     return {c, [c, options, settings] {
                 // The reading and writing threads share the cores with the denoiser's: OpenMP

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -65,17 +66,20 @@ int frameIndexOf(const std::string& fileName, std::string_view stem,
 int countFrames(const std::filesystem::path& folder, std::string_view stem,
                 std::string_view extension = ".exr");
 
-// Removes the regular files "<stem>_<i><extension>" of `folder` with i >= firstRemoved (0: all
-// of them): outputs of an earlier run that this one does not rewrite. Nothing else is touched.
+// Removes the regular files "<stem>_<i><extension>" of `folder` with firstRemoved <= i <
+// endRemoved (0 and the default: all of them): outputs of an earlier run that this one does not
+// rewrite. Nothing else is touched (a chunk's run leaves the other chunks' files alone).
 void removeNumberedFiles(const std::filesystem::path& folder, std::string_view stem,
-                         std::string_view extension, int firstRemoved);
+                         std::string_view extension, int firstRemoved,
+                         int endRemoved = std::numeric_limits<int>::max());
 
 // ---- frame sources ----
 
 // A sequence of frames on disk in one of the layouts rtdenoise reads: the course folder
 // (Sequence) or the multilayer EXRs Blender writes for an animation (BlenderSequence).
-// openFrameSource picks the one a path names. Frames are numbered 0..frameCount()-1 whatever
-// the files' own numbers; readFrame is const and may run on another thread than the caller's.
+// openFrameSource picks the one a path names. Frames are indexed 0..frameCount()-1 whatever
+// the files' own numbers (firstFrameNumber() + index: beauty_<i>.exr's i, or Blender's 0001.exr's
+// 1); readFrame is const and may run on another thread than the caller's.
 class FrameSource {
   public:
     virtual ~FrameSource() = default;
@@ -83,10 +87,13 @@ class FrameSource {
     virtual int frameCount() const = 0;
     // Reads and validates frame i (0..frameCount()-1), as image.h documents a Frame.
     virtual Frame readFrame(int index) const = 0;
-    // Checks frames 0..count-1 as far as can be done without reading pixels (files present,
-    // headers with the channels readFrame reads, one size per frame, any side files), so that a
-    // long run does not fail at frame i. Returns each frame's size.
-    virtual std::vector<ExrSize> checkFrames(int count) const = 0;
+    // The input's own number of frame index 0 (the folder layout: 0; Blender's files: the first
+    // file's number). Numbers are contiguous: frame i is number firstFrameNumber() + i.
+    virtual int firstFrameNumber() const { return 0; }
+    // Checks frames firstIndex..firstIndex+count-1 as far as can be done without reading pixels
+    // (files present, headers with the channels readFrame reads, one size per frame, any side
+    // files), so that a long run does not fail at frame i. Returns each frame's size.
+    virtual std::vector<ExrSize> checkFrames(int count, int firstIndex = 0) const = 0;
     // One line for progress messages: the path and the layout ("... (course layout)").
     virtual std::string describe() const = 0;
     // The file that stands for frame i in messages: its beauty, or its multilayer EXR.
@@ -115,11 +122,11 @@ class Sequence : public FrameSource {
     // Reads and validates frame i: all buffers the same size, IDs in -1..K-1.
     Frame readFrame(int index) const override;
 
-    // Checks frames 0..count-1 as far as can be done without reading pixels, so that a long run
-    // does not fail at frame i: every file present, EXR headers with the channels readFrame
-    // reads, the buffers of a frame of one size, every matrix_i.mat read and validated. Returns
-    // each frame's size. Only the IDs (pixel values) are left to readFrame.
-    std::vector<ExrSize> checkFrames(int count) const override;
+    // Checks frames firstIndex..firstIndex+count-1 as far as can be done without reading pixels,
+    // so that a long run does not fail at frame i: every file present, EXR headers with the
+    // channels readFrame reads, the buffers of a frame of one size, every matrix_i.mat read and
+    // validated. Returns each frame's size. Only the IDs (pixel values) are left to readFrame.
+    std::vector<ExrSize> checkFrames(int count, int firstIndex = 0) const override;
 
     std::string describe() const override;
     std::filesystem::path frameFile(int index) const override;
@@ -182,10 +189,11 @@ class BlenderSequence : public FrameSource {
     explicit BlenderSequence(const std::filesystem::path& input, std::string viewLayer = {});
 
     int frameCount() const override { return files_.count; }
+    int firstFrameNumber() const override { return files_.first; }
     Frame readFrame(int index) const override;
     // Every file's header holds the passes the first one has and no optional pass it lacks (the
     // sequence reads the same passes from each), the view layer, and a plausible size.
-    std::vector<ExrSize> checkFrames(int count) const override;
+    std::vector<ExrSize> checkFrames(int count, int firstIndex = 0) const override;
     std::string describe() const override;
     std::filesystem::path frameFile(int index) const override { return files_.file(index); }
     std::vector<std::string> warnings() const override { return warnings_; }
@@ -220,6 +228,26 @@ struct FrameSourceOptions {
 // MissingFile naming the path when it is neither.
 std::unique_ptr<FrameSource> openFrameSource(const std::filesystem::path& input,
                                              const FrameSourceOptions& options = {});
+
+// ---- chunks of a shot ----
+
+// The warm-up a chunk runs before its first frame when none is given: the frames whose history
+// makes a chunk's first frame match a run over the whole shot (docs/farm.md, measured).
+constexpr int kDefaultChunkWarmup = 48;
+
+// A chunk of a sequence as frame indices (0..frameCount()-1): frames warmupIndex..firstIndex-1
+// are denoised for their history only, firstIndex..endIndex-1 are the chunk's results.
+struct FrameChunk {
+    int warmupIndex = 0;
+    int firstIndex = 0;
+    int endIndex = 0;
+};
+
+// The chunk of input frame numbers firstNumber..endNumber-1 (the files' own numbers:
+// beauty_<i>.exr's i, Blender's 0001.exr's 1) after `warmup` frames, fewer where the sequence
+// starts sooner. Throws InvalidArgument naming the source and the numbers it holds when the
+// range is empty or reaches outside them, or the warm-up is negative.
+FrameChunk chunkOf(const FrameSource& source, int firstNumber, int endNumber, int warmup);
 
 // The R, G, B channels of an EXR's colour: R, G, B of a plain EXR, else the Combined pass of a
 // Blender multilayer EXR's first view layer (or of `viewLayer`). Throws InvalidInput naming the

@@ -42,7 +42,9 @@ __all__ = [
     "InvalidArgumentError",
     "Matrices",
     "MissingFileError",
+    "DEFAULT_CHUNK_WARMUP",
     "compare",
+    "denoise_chunk",
     "metrics",
     "open_sequence",
     "read_exr",
@@ -188,6 +190,12 @@ class FrameSequence(collections.abc.Sequence):
         matrices = values.pop("matrices")
         return Frame(matrices=Matrices(**matrices) if matrices else None, **values)
 
+    @property
+    def first_number(self) -> int:
+        """The input's own number of frame 0 (beauty_<i>.exr's i: 0; Blender's 0001.exr: 1);
+        frame i is number first_number + i."""
+        return self._source.first_frame_number()
+
     def frame_file(self, index: int) -> str:
         """The file that stands for frame `index` in messages (its beauty or its EXR)."""
         return os.fspath(self._source.frame_file(index))
@@ -209,6 +217,26 @@ class FrameSequence(collections.abc.Sequence):
 
     def __repr__(self) -> str:
         return f"<rtdenoise.FrameSequence {self.description}, {len(self)} frames>"
+
+
+# The warm-up `rtdenoise denoise --frames A:B` runs before a chunk when none is given: enough
+# history for the chunk's first frame to match a run over the whole shot (docs/farm.md).
+DEFAULT_CHUNK_WARMUP = int(_native.DEFAULT_CHUNK_WARMUP)
+
+
+def denoise_chunk(denoiser, sequence: FrameSequence, first: int, end: int,
+                  warmup: int = DEFAULT_CHUNK_WARMUP):
+    """Denoises the chunk of `sequence` with the input's frame numbers first..end-1 (as
+    `rtdenoise denoise --frames first:end --warmup warmup`): the `warmup` frames before `first`
+    (fewer where the sequence starts sooner) are denoised for their history and not returned.
+    Yields (frame number, (H, W, 3) float32 image) for the chunk's frames. InvalidArgumentError
+    names the sequence and its frames for a range outside them. `denoiser` keeps its history:
+    give a fresh one (or call reset()) per chunk."""
+    warmup_index, first_index, end_index = sequence._source.chunk(int(first), int(end), int(warmup))
+    for index in range(warmup_index, end_index):
+        image = denoiser.denoise_frame(sequence[index])
+        if index >= first_index:
+            yield sequence.first_number + index, image
 
 
 def open_sequence(path: PathLike, view_layer: Optional[str] = None) -> FrameSequence:

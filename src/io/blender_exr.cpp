@@ -609,12 +609,13 @@ void BlenderSequence::requirePasses(const fs::path& file, const ExrContents& con
     }
 }
 
-std::vector<ExrSize> BlenderSequence::checkFrames(int count) const {
-    if (count < 0 || count > files_.count)
-        throw Error(ErrorCode::InvalidArgument, fmt::format("{}: cannot check {} frames, it has {}",
-                                                            files_.pattern(), count, files_.count));
+std::vector<ExrSize> BlenderSequence::checkFrames(int count, int firstIndex) const {
+    if (count < 0 || firstIndex < 0 || firstIndex + count > files_.count)
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("{}: cannot check {} frames from frame {}, it has {}",
+                                files_.pattern(), count, firstIndex, files_.count));
     std::vector<ExrSize> sizes;
-    for (int index = 0; index < count; ++index) {
+    for (int index = firstIndex; index < firstIndex + count; ++index) {
         const fs::path file = files_.file(index);
         const ExrContents contents = readExrContents(file);
         requirePasses(file, contents);

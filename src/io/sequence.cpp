@@ -141,14 +141,15 @@ int countFrames(const std::filesystem::path& folder, std::string_view stem,
 }
 
 void removeNumberedFiles(const std::filesystem::path& folder, std::string_view stem,
-                         std::string_view extension, int firstRemoved) {
+                         std::string_view extension, int firstRemoved, int endRemoved) {
     std::error_code ec;
     std::vector<std::filesystem::path> stale;
     for (std::filesystem::directory_iterator it(folder, ec);
          !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
         const int index = frameIndexOf(it->path().filename().string(), stem, extension);
         std::error_code typeError;
-        if (index >= firstRemoved && it->is_regular_file(typeError)) stale.push_back(it->path());
+        if (index >= firstRemoved && index < endRemoved && it->is_regular_file(typeError))
+            stale.push_back(it->path());
     }
     for (const std::filesystem::path& file : stale) {
         std::filesystem::remove(file, ec);
@@ -157,6 +158,28 @@ void removeNumberedFiles(const std::filesystem::path& folder, std::string_view s
                 ErrorCode::IoFailure,
                 file.string() + ": cannot remove this output of an earlier run: " + ec.message());
     }
+}
+
+FrameChunk chunkOf(const FrameSource& source, int firstNumber, int endNumber, int warmup) {
+    const int first = source.firstFrameNumber();
+    const int end = first + source.frameCount();
+    if (endNumber <= firstNumber)
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("frames {}:{} is empty: the end ({}) is the first frame after "
+                                "the chunk, and must be greater than its start ({})",
+                                firstNumber, endNumber, endNumber, firstNumber));
+    if (firstNumber < first || endNumber > end)
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("frames {}..{} reach outside {}", firstNumber, endNumber - 1,
+                                source.describe()));
+    if (warmup < 0)
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("a warm-up of {} frames: it must be 0 or more", warmup));
+    FrameChunk chunk;
+    chunk.firstIndex = firstNumber - first;
+    chunk.endIndex = endNumber - first;
+    chunk.warmupIndex = std::max(0, chunk.firstIndex - warmup);
+    return chunk;
 }
 
 Sequence::Sequence(std::filesystem::path folder)
@@ -237,14 +260,14 @@ std::filesystem::path Sequence::frameFile(int index) const {
     return folder_ / fmt::format("beauty_{}.exr", index);
 }
 
-std::vector<ExrSize> Sequence::checkFrames(int count) const {
-    if (count < 0 || count > frameCount_) {
-        throw Error(ErrorCode::InvalidArgument, folder_.string() + ": cannot check " +
-                                                    std::to_string(count) + " frames, it has " +
-                                                    std::to_string(frameCount_));
+std::vector<ExrSize> Sequence::checkFrames(int count, int firstIndex) const {
+    if (count < 0 || firstIndex < 0 || firstIndex + count > frameCount_) {
+        throw Error(ErrorCode::InvalidArgument,
+                    fmt::format("{}: cannot check {} frames from frame {}, it has {}",
+                                folder_.string(), count, firstIndex, frameCount_));
     }
     std::vector<ExrSize> sizes;
-    for (int index = 0; index < count; ++index) {
+    for (int index = firstIndex; index < firstIndex + count; ++index) {
         const std::string suffix = "_" + std::to_string(index);
         const auto path = [&](const char* stem, const char* extension) {
             return folder_ / (stem + suffix + extension);
