@@ -8,8 +8,8 @@ bin="${1:-build/release}/rtdenoise"
 box=../shared/data/box
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# A 0-radius JBF without firefly removal is the identity: the tone-mapped input.
-"$bin" denoise "$box" -o "$work/input" --method jbf --radius 0 --no-outlier --png -q
+# A 0-radius JBF without firefly removal and energy restoration is the identity: the input.
+"$bin" denoise "$box" -o "$work/input" --method jbf --radius 0 --no-outlier --no-energy --png -q
 "$bin" denoise "$box" -o "$work/jbf" --method jbf --png -q
 "$bin" denoise "$box" -o "$work/atrous" --method atrous --png -q
 "$bin" denoise "$box" -o "$work/temporal" --method temporal --png --debug -q

@@ -51,6 +51,9 @@ def score(sequence, reference, method, work):
     args = ["--method", method]
     if method == "input":  # a 0-radius JBF without firefly removal is the identity
         args = ["--method", "jbf", "--radius", "0", "--no-outlier", "--no-albedo"]
+        if "--no-energy" in subprocess.run([BIN, "denoise", "--help"], capture_output=True,
+                                           text=True).stdout:
+            args.append("--no-energy")  # (builds before 2026-12-05 have no such option)
     run(BIN, "denoise", sequence, "-o", out, "-q", *args)
     report = out.with_suffix(".json")
     run(BIN, "compare", out, reference, "--json", report, "-q")
