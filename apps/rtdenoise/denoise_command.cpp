@@ -653,7 +653,7 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
                "Give back the light the robust steps discard, per 16x16 tile, from the noisy "
                "input's mean (on by default)");
     c.add_option("--energy-cap", s.energy.cap,
-                 "[>=1] input samples above cap x the local output mean count as that much")
+                 "[>=1] input samples above cap x the local mean count as that much")
         ->capture_default_str();
 }
 

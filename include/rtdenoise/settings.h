@@ -61,8 +61,9 @@ struct OutlierSettings {
 // tile, from the noisy input's mean over the frames (docs/energy.md).
 struct EnergySettings {
     bool keep = true;     // scale the output so that each tile keeps the input's light
-    float cap = 128.0f;   // [>=1] input samples above cap x the local output mean count as
-                          // that much (a lone firefly cannot brighten its tiles)
+    float cap = 128.0f;   // [>=1] input samples above cap x the local mean count as that
+                          // much (a quarter of it in a first frame): a lone firefly cannot
+                          // brighten its tiles much
 };
 
 // Which previous-frame pixels may serve as history (temporal and svgf methods).

@@ -2,10 +2,12 @@
 // removal, the history clamps, the luminance edge-stopping) discards some of the bright tail of
 // 1-spp noise, and that tail carries much of indirect light, so the output is darker than the
 // reference. This last pass gives the light back at a coarse scale: per 16x16 tile, the mean of
-// the noisy input (its firefly samples capped at `cap` times the tiles' output mean) over the mean
-// of the output, both averaged over the frames (an exponential average of the tile's sums) and
-// over the 3x3 neighbouring tiles, scales the output (interpolated bilinearly between tile
-// centres). The scale is smooth across the image: structure, edges and noise are the method's.
+// the noisy input over the mean of the output, both averaged over the last frames (an
+// exponential average of the tile's sums) and over the 3x3 neighbouring tiles, scales the output
+// (interpolated bilinearly between tile centres). The input's samples are capped at `cap` times
+// the tiles' mean (the input's or the output's, the larger), less in a tile's first frames, so
+// that one firefly cannot brighten its tiles much. The scale is smooth across the image:
+// structure, edges and noise are the method's.
 // Pixels brighter than the cap (lights seen directly) are neither counted nor scaled.
 //
 // One kernel reads the input after the ingest; three run over the tile grid (one item per tile)
@@ -114,7 +116,7 @@ struct EnergyAccumulateKernel {
     EnergyGrid grid;
     int temporal = 0;  // 1: average over frames (temporal methods)
     int hasHistory = 0;
-    float maxFrames = 32.0f;
+    float maxFrames = 4.0f;   // frames averaged at most
     float capScale = 128.0f;  // EnergySettings::cap
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int tx, int ty) const {
