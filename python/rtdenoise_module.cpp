@@ -181,6 +181,9 @@ class CApiDenoiser {
                              worldToCamera.data(), worldToScreen.data()));
     }
 
+    // Forgets the matrices an earlier frame set (rtdSetMatrices with none).
+    void unsetMatrices() { check(rtdSetMatrices(denoiser_, nullptr, 0, nullptr, nullptr)); }
+
     void setObjectCount(int count) { check(rtdSetObjectCount(denoiser_, count)); }
 
     // The filters run without the GIL: other Python threads go on meanwhile (the bound arrays
@@ -487,6 +490,7 @@ PYBIND11_MODULE(_rtdenoise, module) {
         .def("set_image", &CApiDenoiser::setImage, py::arg("name"), py::arg("array"),
              py::arg("format"), py::arg("pixel_stride"), py::arg("row_stride"))
         .def("set_matrices", &CApiDenoiser::setMatrices)
+        .def("unset_matrices", &CApiDenoiser::unsetMatrices)
         .def("set_object_count", &CApiDenoiser::setObjectCount)
         .def("execute", &CApiDenoiser::execute)
         .def("reset", &CApiDenoiser::reset)

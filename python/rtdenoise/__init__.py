@@ -637,14 +637,6 @@ class Denoiser:
         object_count = _checked_object_count(object_count)
         if object_count is None:
             object_count = _object_count_of(ids)
-        if matrices is None and motion is None and self._matrices_given:
-            # A single-frame method reads no matrices and the object count alone bounds its IDs,
-            # but the library would take the matrices of an earlier frame (and their count):
-            # identities replace them. Only then: they cost 64 bytes per object.
-            identity = np.eye(4, dtype=np.float32)
-            everywhere = np.broadcast_to(identity, (object_count, 4, 4))
-            matrices = Matrices(np.ascontiguousarray(everywhere), identity, identity)
-
         result, written = self._output(out, size)
         inputs = {
             "color": (color, color.shape[2]),
@@ -675,6 +667,10 @@ class Denoiser:
                     )
                     self._matrices_given = True
                 else:  # motion, or a single-frame method: the object count bounds the IDs
+                    if self._matrices_given:
+                        # An earlier frame's matrices (and their count) would still apply.
+                        self._core.unset_matrices()
+                        self._matrices_given = False
                     self._core.set_object_count(object_count)
                 self._core.execute()
                 broken = self._core.frame_warning()
