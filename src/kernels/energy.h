@@ -13,7 +13,7 @@
 // One kernel reads the input after the ingest; three run over the tile grid (one item per tile)
 // and one over the pixels at the end:
 //   EnergyInput ... EnergyOutputSums -> EnergyAccumulate -> EnergyGain -> EnergyApply
-// Tile data lives in one unpadded float image (index: plane-like blocks of `tiles` floats).
+// Tile data: images of one value per tile (ResourceDecl::tile), a plane per array.
 #pragma once
 
 #include "kernels/convert.h"

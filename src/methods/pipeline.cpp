@@ -105,8 +105,10 @@ bool Pipeline::keepsHistory() const {
 }
 
 std::size_t Pipeline::count(const ResourceDecl& d) const {
-    std::size_t perPlane = d.padded ? std::size_t(layout_.planeSize)
-                                    : std::size_t(layout_.width) * std::size_t(layout_.height);
+    const auto tiles = [&](int size) { return std::size_t((size + d.tile - 1) / d.tile); };
+    std::size_t perPlane = d.padded     ? std::size_t(layout_.planeSize)
+                           : d.tile > 0 ? tiles(layout_.width) * tiles(layout_.height)
+                                        : std::size_t(layout_.width) * std::size_t(layout_.height);
     return std::size_t(d.planes) * perPlane * elementBytes(d.element);
 }
 
@@ -120,7 +122,8 @@ void Pipeline::allocate(Device& device, int width, int height) {
     L.height = height;
     L.padding = border;
     // In 64 bits: a width near INT_MAX must be refused here, not overflow into a small pitch.
-    const long long pitch = (static_cast<long long>(width) + 2 * border + kAlign - 1) / kAlign * kAlign;
+    const long long pitch =
+        (static_cast<long long>(width) + 2 * border + kAlign - 1) / kAlign * kAlign;
     const long long planeSize = pitch * (static_cast<long long>(height) + 2 * border);
     // Pixel indices are 32-bit (the widest image has 7 planes).
     if (7 * planeSize > 0x7fffffffLL)
@@ -148,17 +151,17 @@ void Pipeline::allocate(Device& device, int width, int height) {
 bool Pipeline::adoptImages(Pipeline& from) {
     auto sameImage = [](const ResourceDecl& a, const ResourceDecl& b) {
         return a.name == b.name && a.element == b.element && a.planes == b.planes &&
-               a.lifetime == b.lifetime && a.fillByte == b.fillByte && a.padded == b.padded;
+               a.lifetime == b.lifetime && a.fillByte == b.fillByte && a.padded == b.padded &&
+               a.tile == b.tile;
     };
     auto samePass = [](const PassInfo& a, const PassInfo& b) {
         return a.name == b.name && a.inputs == b.inputs && a.outputs == b.outputs;
     };
-    const bool same =
-        reach_ == from.reach_ && steps_ == from.steps_ &&
-        std::equal(resources_.begin(), resources_.end(), from.resources_.begin(),
-                   from.resources_.end(), sameImage) &&
-        std::equal(passInfos_.begin(), passInfos_.end(), from.passInfos_.begin(),
-                   from.passInfos_.end(), samePass);
+    const bool same = reach_ == from.reach_ && steps_ == from.steps_ &&
+                      std::equal(resources_.begin(), resources_.end(), from.resources_.begin(),
+                                 from.resources_.end(), sameImage) &&
+                      std::equal(passInfos_.begin(), passInfos_.end(), from.passInfos_.begin(),
+                                 from.passInfos_.end(), samePass);
     if (!same) return false;
     // The device prepared its forms of these same steps for this layout already.
     memory_ = std::move(from.memory_);

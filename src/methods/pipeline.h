@@ -36,6 +36,7 @@ struct ResourceDecl {
     Lifetime lifetime = Lifetime::Frame;
     std::uint8_t fillByte = 0;  // every byte's value when allocated; the border keeps it
     bool padded = true;         // false: one value per pixel of the frame, no border
+    int tile = 0;               // > 0 (with padded false): one value per tile x tile pixels
     // A debug view of this resource, the frame just processed (none: DebugView count).
     bool hasDebugView = false;
     DebugView debugView = DebugView::Reprojection;

@@ -42,16 +42,20 @@ FrameImages declareMethodPasses(Pipeline& pipeline, const DenoiserSettings& sett
     throw Error(ErrorCode::InvalidArgument, "settings: unknown method");
 }
 
-// The energy restoration of the output, last (kernels/energy.h). Its tile arrays live in
-// unpadded one-plane images (a tile's arrays need far fewer floats than its 256 pixels).
+// The energy restoration of the output, last (kernels/energy.h): its arrays hold one value per
+// 16x16 tile.
 void declareEnergy(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f) {
     if (!settings.energy.keep) return;
     // The tiles' average spans up to 4 frames: longer ones lag behind a method whose loss falls
     // as its history grows (chosen on the train set, docs/energy.md).
     constexpr float kEnergyFrames = 4.0f;
-    ResourceId tiles = p.declare({.name = "energyTiles", .padded = false});
-    ResourceId history =
-        p.declare({.name = "energyHistory", .lifetime = Lifetime::History, .padded = false});
+    ResourceId tiles =
+        p.declare({.name = "energyTiles", .planes = 5, .padded = false, .tile = kEnergyTile});
+    ResourceId history = p.declare({.name = "energyHistory",
+                                    .planes = 3,
+                                    .lifetime = Lifetime::History,
+                                    .padded = false,
+                                    .tile = kEnergyTile});
     const int temporal = usesHistory(settings.method) ? 1 : 0;
     const float cap = settings.energy.cap;
     p.addPass(
@@ -59,9 +63,6 @@ void declareEnergy(Pipeline& p, const DenoiserSettings& settings, const FrameIma
         {p.frame(), f.energyInput, f.filterKeys, p.output(), previous(history)},
         {tiles, history, p.output()}, 0, [=](const PassContext& c) {
             const Layout& L = c.layout();
-            // Images under 5 pixels have no room for the arrays (and no tile to speak of).
-            if (5 * energyTilesAcross(L.width) * energyTilesAcross(L.height) > L.width * L.height)
-                return;
             EnergyGrid grid{energyTilesAcross(L.width), energyTilesAcross(L.height),
                             c.floats(tiles), c.floats(history), c.floats(previous(history))};
             const std::int32_t* keys = c.ints(f.filterKeys);
