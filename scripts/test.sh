@@ -9,6 +9,8 @@ cd "$(dirname "$0")/.."
 cmake --preset release
 cmake --build --preset release -j "$(nproc)"
 ctest --preset release -j "$(nproc)"
+# The installed package in a consumer project's build (label install: about 24 s).
+ctest --preset install
 # One process that renders the scenes and denoises them on every core.
 ctest --preset quality
 # One test at a time: each denoiser's threads use every core, and the timing it prints means
