@@ -22,6 +22,7 @@ the set's tiles.
 Environment: RTDENOISE (default build/release/rtdenoise); the Python module on PYTHONPATH
 (build/release/python) and numpy for the tiles."""
 import argparse
+import functools
 import json
 import math
 import os
@@ -45,14 +46,20 @@ def run(*args):
                    stderr=subprocess.PIPE)
 
 
+@functools.cache
+def has_no_energy():
+    """Whether the build has --no-energy (asked once)."""
+    return "--no-energy" in subprocess.run([BIN, "denoise", "--help"], capture_output=True,
+                                           text=True).stdout
+
+
 def score(sequence, reference, method, work):
     """compare's mean metrics of `method` on `sequence` against `reference`."""
     out = work / f"{sequence.parent.name}-{sequence.name}-{method}"
     args = ["--method", method]
     if method == "input":  # a 0-radius JBF without firefly removal is the identity
         args = ["--method", "jbf", "--radius", "0", "--no-outlier", "--no-albedo"]
-        if "--no-energy" in subprocess.run([BIN, "denoise", "--help"], capture_output=True,
-                                           text=True).stdout:
+        if has_no_energy():
             args.append("--no-energy")  # (builds before 2026-12-05 have no such option)
     run(BIN, "denoise", sequence, "-o", out, "-q", *args)
     report = out.with_suffix(".json")

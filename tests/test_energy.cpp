@@ -29,12 +29,6 @@ Frame sparseLight(unsigned seed) {
     return f;
 }
 
-double mean(const Image& image) {
-    double sum = 0.0;
-    for (float v : image.pixels) sum += v;
-    return sum / double(image.pixels.size());
-}
-
 // Every method, frames 6-23: the output keeps the input's mean (1) within 5 % with the
 // restoration; without it the firefly removal and the edge-stopping lose more than 10 % (the
 // test can fail). The first frames overshoot on so sparse a signal (docs/energy.md): a temporal
@@ -49,7 +43,7 @@ TEST(Energy, SparseBrightSamplesKeepTheirLight) {
             double kept = 0.0;
             for (unsigned frame = 0; frame < 24; ++frame) {
                 const Image out = denoiser.processFrame(sparseLight(frame + 1));
-                if (frame >= 6) kept += mean(out) / 18.0;
+                if (frame >= 6) kept += test::meanValue(out) / 18.0;
             }
             if (keep)
                 EXPECT_NEAR(kept, 1.0, 0.05) << toString(method);

@@ -1136,12 +1136,6 @@ std::vector<Image> renderConfidence(const std::string& scene, int size, int fram
     return out;
 }
 
-double mean(const Image& image) {
-    double sum = 0.0;
-    for (float v : image.pixels) sum += v;
-    return sum / double(image.pixels.size());
-}
-
 // switching-light's ceiling light goes off at frame 6: the history of what it lit is stale
 // there, and only there. "What it lit": pixels that keep under 25% of their light (frames 5 and 6
 // at 16 spp, 3x3 box); elsewhere the orbiting light, which moves a little each frame, dominates.
@@ -1181,10 +1175,10 @@ TEST(Confidence, DropsOnTheFrameTheLightSwitchesAndStaysNearOneElsewhere) {
             EXPECT_LT(litMean, 0.3) << "frame " << i;
         } else if (i == 7) {
             // Lit by the orbiting light alone, the room's lighting changes by a fifth a frame.
-            EXPECT_GT(mean(confidence[i]), 0.65) << "frame " << i;
+            EXPECT_GT(test::meanValue(confidence[i]), 0.65) << "frame " << i;
         } else {
             EXPECT_GT(litMean, 0.85) << "frame " << i;
-            EXPECT_GT(mean(confidence[i]), 0.85) << "frame " << i;
+            EXPECT_GT(test::meanValue(confidence[i]), 0.85) << "frame " << i;
         }
     }
 }
@@ -1204,7 +1198,7 @@ TEST(Confidence, IsOneWhereNothingChanges) {
     const Image c = historyConfidence(still, still, gbuffer, t);
     ASSERT_EQ(c.width, 48);
     ASSERT_EQ(c.height, 40);
-    EXPECT_EQ(mean(c), 1.0);
+    EXPECT_EQ(test::meanValue(c), 1.0);
 }
 
 using test::CliResult;

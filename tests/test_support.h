@@ -90,6 +90,13 @@ inline Frame makeFrame(const SceneDescription& d) {
     return f;
 }
 
+// Mean of every value of an image (all channels).
+inline double meanValue(const Image& image) {
+    double sum = 0.0;
+    for (float v : image.pixels) sum += v;
+    return sum / double(image.pixels.size());
+}
+
 // Adds zero-mean uniform noise of half-width `amplitude` to the beauty (deterministic).
 inline void addNoise(Frame& f, float amplitude, unsigned seed) {
     std::mt19937 rng(seed);
