@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "methods/learned_weights.h"
 #include "rtdenoise/error.h"
 #include "tuning.h"
 
@@ -72,6 +73,8 @@ void validate(const DenoiserSettings& s) {
             "detail-clamp-sigma must be >= 0");
     require(unit(s.detail.momentsAlpha), "detail-moments-alpha must be in [0, 1]");
     require(positive(s.albedo.epsilon), "albedo-epsilon must be > 0");
+    // A user's weights file is read and checked now, before any frame: the error names it.
+    if (!s.learned.weights.empty()) learnedNetwork(s.learned.weights);
 }
 
 const char* toString(Method method) {
@@ -86,6 +89,8 @@ const char* toString(Method method) {
             return "svgf";
         case Method::Detail:
             return "detail";
+        case Method::Learned:
+            return "learned";
     }
     return "?";
 }

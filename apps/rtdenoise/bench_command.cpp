@@ -87,7 +87,8 @@ const std::map<std::string, Method> kBenchMethods{{"jbf", Method::Jbf},
                                                   {"atrous", Method::Atrous},
                                                   {"temporal", Method::Temporal},
                                                   {"svgf", Method::Svgf},
-                                                  {"detail", Method::Detail}};
+                                                  {"detail", Method::Detail},
+                                                  {"learned", Method::Learned}};
 struct BenchDevice {
     DeviceType type;
     CpuIsa isa;
@@ -244,7 +245,7 @@ Command addBenchCommand(CLI::App& app) {
     CLI::App* c = app.add_subcommand(
         "bench", "Median and min ms per frame and per pass of each method, device and size");
     c->add_option("--method", o->methods, "Methods to time")
-        ->check(CLI::IsMember({"jbf", "atrous", "temporal", "svgf", "detail"}))
+        ->check(CLI::IsMember({"jbf", "atrous", "temporal", "svgf", "detail", "learned"}))
         ->capture_default_str();
     c->add_option("--device", o->devices,
                   "Devices to time; cpu-scalar|sse2|avx2|avx512: the CPU kernels built for one "

@@ -55,7 +55,19 @@ const std::map<std::string, Method> kMethods{{"jbf", Method::Jbf},
                                              {"atrous", Method::Atrous},
                                              {"temporal", Method::Temporal},
                                              {"svgf", Method::Svgf},
-                                             {"detail", Method::Detail}};
+                                             {"detail", Method::Detail},
+                                             {"learned", Method::Learned}};
+// The learned method's training inputs (DebugView::LearnedInputs), as docs/learned_spec.md names
+// them.
+constexpr const char* kLearnedInputsFolder = "learned-inputs";
+const std::vector<std::string> kLearnedInputNames = [] {
+    std::vector<std::string> names;
+    for (int k = 0; k < 6; ++k)
+        for (const char* c : {"R", "G", "B", "V"}) names.push_back(fmt::format("L{}.{}", k, c));
+    for (const char* name : {"history", "albedo.R", "albedo.G", "albedo.B", "foreground"})
+        names.push_back(name);
+    return names;
+}();
 const std::map<std::string, SpatialFilter> kFilters{{"jbf", SpatialFilter::Jbf},
                                                     {"atrous", SpatialFilter::Atrous}};
 const std::map<std::string, DeviceType> kDevices{
@@ -187,6 +199,7 @@ void removeEarlierOutputs(const DenoiseOptions& options, const DenoiserSettings&
                           int frames, std::optional<std::pair<int, int>> chunkNumbers) {
     const bool history = usesHistory(settings.method);
     const bool svgfViews = settings.method == Method::Svgf || settings.method == Method::Detail;
+    const bool learnedInputs = settings.method == Method::Learned;
     const auto remove = [&](std::string_view stem, std::string_view extension, bool written) {
         if (chunkNumbers) {
             if (!written)
@@ -201,6 +214,14 @@ void removeEarlierOutputs(const DenoiseOptions& options, const DenoiserSettings&
     remove("reprojection", ".png", options.debug && history);
     remove("variance", ".png", options.debug && svgfViews);
     remove("history", ".png", options.debug && svgfViews);
+    if (chunkNumbers) {
+        if (!(options.debug && learnedInputs))
+            removeNumberedFiles(options.output / kLearnedInputsFolder, "learned-inputs", ".exr",
+                                chunkNumbers->first, chunkNumbers->second);
+    } else {
+        removeNumberedFiles(options.output / kLearnedInputsFolder, "learned-inputs", ".exr",
+                            options.debug && learnedInputs ? frames : 0);
+    }
 }
 
 // What the ingest repaired, per frame: (frame, count) where the count is not 0.
@@ -403,8 +424,16 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
                     video->addFrame(display);
                 }
             }
-            for (const auto& [prefix, image] : debug)
-                writePng(options.output / fmt::format("{}_{}.png", prefix, i), image);
+            for (const auto& [prefix, image] : debug) {
+                if (std::size_t(image.channels) == kLearnedInputNames.size()) {
+                    // A folder of their own: `compare` then finds the results alone.
+                    const fs::path folder = options.output / kLearnedInputsFolder;
+                    fs::create_directories(folder);
+                    writeExrChannels(folder / fmt::format("{}_{}.exr", prefix, i),
+                                     {{&image, kLearnedInputNames, false}});
+                } else
+                    writePng(options.output / fmt::format("{}_{}.png", prefix, i), image);
+            }
             return std::chrono::duration<double, std::milli>(Clock::now() - writeStart).count();
         });
     };
@@ -445,6 +474,8 @@ int runDenoise(const DenoiseOptions& options, const DenoiserSettings& settings) 
                 debug.emplace_back("variance", denoiser.debugImage(DebugView::Variance));
                 debug.emplace_back("history", denoiser.debugImage(DebugView::HistoryLength));
             }
+            if (settings.method == Method::Learned)
+                debug.emplace_back("learned-inputs", denoiser.debugImage(DebugView::LearnedInputs));
         }
         if (writing.valid()) writeTimes.push_back(writing.get());  // in order, one at a time
         writing = writeAsync(numberOf(i), result, std::move(debug));
@@ -537,7 +568,7 @@ void addTilePassesOption(CLI::App& command, TilePasses& target, const std::strin
 void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     // Named choices: the help shows the names and the default by name, not the enum values.
     addChoice(c, "--method", s.method, kMethods, "Denoising method",
-              "jbf|atrous|temporal|svgf|detail");
+              "jbf|atrous|temporal|svgf|detail|learned");
     addChoice(c, "--spatial-filter", s.temporal.spatialFilter, kFilters,
               "Spatial filter of the temporal method", "jbf|atrous");
     addChoice(c, "--device", s.device, kDevices,
@@ -655,6 +686,9 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     c.add_option("--energy-cap", s.energy.cap,
                  "[>=1] input samples above cap x the local mean count as that much")
         ->capture_default_str();
+    c.add_option("--weights", s.learned.weights,
+                 "The learned method's weights file (training/train.py writes one; default: the "
+                 "built-in weights)");
 }
 
 Command addDenoiseCommand(CLI::App& app) {
@@ -698,7 +732,8 @@ Command addDenoiseCommand(CLI::App& app) {
     c->add_flag("--debug", options->debug,
                 "Write reprojection_<i>.png (history valid green, outside the screen red, other "
                 "object or depth/normal mismatch yellow, background blue, no history black); "
-                "svgf also variance_<i>.png (luminance stddev) and history_<i>.png (length / cap)");
+                "svgf also variance_<i>.png (luminance stddev) and history_<i>.png (length / cap); "
+                "learned: learned-inputs/learned-inputs_<i>.exr, its network's inputs (training/)");
     c->add_option("--frames", options->frames,
                   "N: only the first N frames (0: all). A:B: a chunk of the shot, the input's "
                   "frame numbers A..B-1 (A: to the end; A..B: A to B inclusive, as Blender "

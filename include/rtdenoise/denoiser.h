@@ -51,6 +51,9 @@ enum class DebugView {
                    // other object or depth/normal mismatch yellow, background blue, none black
     Variance,  // svgf: luminance standard deviation after the variance pass (grey, clipped at 1)
     HistoryLength,  // svgf: frames accumulated per pixel, grey = length / max history
+    LearnedInputs,  // learned: the network's 29 inputs per pixel, for training
+                    // (docs/learned.md): candidates L0..L5 (rgb + variance), history, albedo,
+                    // foreground
 };
 
 // Where denoisers run, shared by several of them (as OIDN's device): on a GPU one CUDA stream

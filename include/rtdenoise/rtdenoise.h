@@ -104,8 +104,8 @@ RTD_API RTDError rtdSynchronize(RTDDevice device);
 
 /* ---- denoisers ---- */
 
-/* method: "jbf", "atrous", "temporal", "svgf", "detail" (NULL: the default, detail). NULL on
- * failure. */
+/* method: "jbf", "atrous", "temporal", "svgf", "detail", "learned" (NULL: the default, detail).
+ * NULL on failure. */
 RTD_API RTDDenoiser rtdNewDenoiser(RTDDevice device, const char* method);
 RTD_API void rtdRetainDenoiser(RTDDenoiser denoiser);
 RTD_API void rtdReleaseDenoiser(RTDDenoiser denoiser);
@@ -113,7 +113,9 @@ RTD_API void rtdReleaseDenoiser(RTDDenoiser denoiser);
 /* Settings by the command line's long option names, without "--" ("sigma-color",
  * "svgf-iterations", "outlier"; rtdenoise denoise --help lists them with their ranges), plus
  * "motion-scale-x", "motion-scale-y" (--motion-scale X,Y) and "depth-kind" ("view-z",
- * "ray-distance"). A value out of range is refused here, naming it. After the first rtdExecute a
+ * "ray-distance"), and "weights" (rtdSetString: the learned method's weights file, NULL or "" the
+ * built-in; a missing, truncated or mismatched file is refused here, naming the problem). A value
+ * out of range is refused here, naming it. After the first rtdExecute a
  * setting takes effect at the next frame; the history is kept (setting a value again, or a new
  * sigma, alpha or tolerance, is cheap) unless the change alters the method's passes: the method,
  * an iteration count, a radius, "outlier" or "albedo" start a new history. rtdSetInt also sets a

@@ -13,11 +13,13 @@ enum class Method {
     Temporal,  // the assignment's pipeline: spatial filter, back-projection, accumulation
     Svgf,      // spatiotemporal variance-guided filtering (Schied et al. 2017)
     Detail,    // detail-preserving history: SVGF's filter over unfiltered, clamped history
+    Learned,   // svgf's filter levels weighed per pixel by a small trained network
 };
 
 // Whether the method keeps a history (reprojects the last frame's).
 inline bool usesHistory(Method method) {
-    return method == Method::Temporal || method == Method::Svgf || method == Method::Detail;
+    return method == Method::Temporal || method == Method::Svgf || method == Method::Detail ||
+           method == Method::Learned;
 }
 
 enum class SpatialFilter { Jbf, Atrous };
@@ -122,6 +124,11 @@ struct DetailSettings {
 // Albedo demodulation (every method): where a frame has an albedo, filter the illumination
 // colour / max(albedo, epsilon) and multiply the albedo back at the end, so that texture detail
 // is not blurred. Frames without an albedo are filtered as they are.
+struct LearnedSettings {
+    std::string weights;  // [a weights file, empty: the built-in] the learned method's network
+                          // (training/: docs/learned.md)
+};
+
 struct AlbedoSettings {
     bool demodulate = true;  // use the frame's albedo when it has one
     float epsilon = 1e-3f;   // [>0] floor of the albedo divided by (black texels)
@@ -147,6 +154,7 @@ struct DenoiserSettings {
     MotionSettings motion;
     SvgfSettings svgf;
     DetailSettings detail;
+    LearnedSettings learned;
     AlbedoSettings albedo;
 };
 

@@ -66,7 +66,7 @@ _DEVICES = {
     "cpu": _native.DEVICE_CPU,
     "cuda": _native.DEVICE_CUDA,
 }
-_TEMPORAL_METHODS = ("temporal", "svgf", "detail")
+_TEMPORAL_METHODS = ("temporal", "svgf", "detail", "learned")
 _INT32_MAX = 2**31 - 1
 # The library clamps radiance and albedo beyond +-kMaxRadiance (1e16) to it.
 _MAX_RADIANCE = float(_native.MAX_RADIANCE)
@@ -444,7 +444,8 @@ class Denoiser:
     across denoise() calls (one frame per call). Not for two threads at once (one per thread or
     stream); the filtering itself runs without the GIL.
 
-    method: "jbf", "atrous", "temporal", "svgf" or "detail"; None: the library's default (detail).
+    method: "jbf", "atrous", "temporal", "svgf", "detail" or "learned"; None: the library's
+    default (detail). weights="FILE": the learned method's own weights (training/train.py).
     device: "default" (a CUDA GPU when there is one, else the CPU), "cpu" or "cuda".
     settings: the command line's options, underscores for hyphens (sigma_color=0.6,
     svgf_iterations=3, outlier=False, spatial_filter="jbf", depth_kind="ray-distance",
@@ -514,8 +515,8 @@ class Denoiser:
             self._core.set_int(key, int(value))
         elif isinstance(value, numbers.Real):
             self._core.set_float(key, float(value))
-        elif isinstance(value, str):
-            self._core.set_string(key, value)
+        elif isinstance(value, (str, os.PathLike)):
+            self._core.set_string(key, os.fspath(value))
         else:
             raise InvalidArgumentError(
                 f"{key}: expected a bool, int, float or str, got {type(value).__name__}"

@@ -202,6 +202,7 @@ const SettingEntry kSettings[] = {
     RTD_SETTING("outlier-k", Float, outlier.k),
     RTD_SETTING("energy", Bool, energy.keep),
     RTD_SETTING("energy-cap", Float, energy.cap),
+    RTD_SETTING("weights", String, learned.weights),
 };
 #undef RTD_SETTING
 
@@ -243,7 +244,7 @@ Enum enumNamed(const char* setting, const char* value, std::initializer_list<Enu
 rtd::Method methodNamed(const char* name) {
     return enumNamed("method", name,
                      {rtd::Method::Jbf, rtd::Method::Atrous, rtd::Method::Temporal,
-                      rtd::Method::Svgf, rtd::Method::Detail});
+                      rtd::Method::Svgf, rtd::Method::Detail, rtd::Method::Learned});
 }
 
 // ---- images by name ----
@@ -672,6 +673,10 @@ RTDError rtdSetString(RTDDenoiser d, const char* name, const char* value) {
         if (std::strcmp(e.name, "method") == 0) {
             const rtd::Method method = methodNamed(value);
             changeSettings(d, [&](DenoiserSettings& s) { s.method = method; });
+        } else if (std::strcmp(e.name, "weights") == 0) {
+            // NULL or "": the built-in weights. A bad file is refused here, naming the problem.
+            const std::string path = value ? value : "";
+            changeSettings(d, [&](DenoiserSettings& s) { s.learned.weights = path; });
         } else {
             const rtd::SpatialFilter filter = enumNamed(
                 "spatial-filter", value, {rtd::SpatialFilter::Jbf, rtd::SpatialFilter::Atrous});
@@ -727,9 +732,9 @@ const char* rtdGetString(RTDDenoiser d, const char* name) {
         }
         const SettingEntry& e = findSetting(name);
         requireKind(e, ValueKind::String);
-        value = std::strcmp(e.name, "method") == 0
-                    ? rtd::toString(d->settings.method)
-                    : rtd::toString(d->settings.temporal.spatialFilter);
+        value = std::strcmp(e.name, "method") == 0    ? rtd::toString(d->settings.method)
+                : std::strcmp(e.name, "weights") == 0 ? d->settings.learned.weights.c_str()
+                                                      : rtd::toString(d->settings.temporal.spatialFilter);
     });
     return value;
 }

@@ -86,6 +86,7 @@ class Device {
     virtual void run(const ModulateStep& step) = 0;
     virtual void run(const EnergyInputStep& step) = 0;
     virtual void run(const EnergyStep& step) = 0;
+    virtual void run(const LearnedMixStep& step) = 0;
     virtual void run(const ConvertStep& step) = 0;
 
     // Timestamps in the device's own order of work (slot 0 up to kTimestampSlots - 1), read

@@ -11,6 +11,7 @@
 #include "kernels/energy.h"
 #include "kernels/ingest.h"
 #include "kernels/jbf.h"
+#include "kernels/learned.h"
 #include "kernels/modulate.h"
 #include "kernels/outlier.h"
 #include "kernels/outlier_tile.h"
@@ -38,6 +39,7 @@ enum class StepKind {
     Modulate,
     EnergyInput,
     Energy,
+    LearnedMix,
 };
 
 // The frame's buffers into the device's images. Its guide (normal + depth, 4 planes) may be
@@ -177,6 +179,11 @@ struct EnergyStep {
     EnergyAccumulateKernel accumulate;
     EnergyGainKernel gain;
     EnergyApplyKernel apply;
+};
+
+// The learned method's network over its candidates, times the albedo, into the output.
+struct LearnedMixStep {
+    LearnedMixKernel mix;
 };
 
 // The same fields in another form of a kernel family (forms differ in template flags only).

@@ -40,7 +40,25 @@ void unregisterChild(pid_t child) noexcept;
 void beginChildSpawn() noexcept;
 void endChildSpawn() noexcept;
 // Kills and reaps the registered children, then unlinks the registered files. Async-signal-safe.
+// Files being created (FileCreation below) are waited for first, up to a second.
 void removeLiveTemporaries() noexcept;
+
+// Held around the call that creates a registered temporary by its path (fopen, OpenEXR's
+// OutputFile): without it, the clean-up could unlink the path just before the writer creates it,
+// leaving the file behind. Once the clean-up has begun, construction throws IoFailure instead of
+// letting a file be created.
+class FileCreation {
+  public:
+    explicit FileCreation(const std::filesystem::path& file);
+    ~FileCreation() { finish(); }
+    FileCreation(const FileCreation&) = delete;
+    FileCreation& operator=(const FileCreation&) = delete;
+    // The file exists (or its creation failed): the clean-up may go on.
+    void finish() noexcept;
+
+  private:
+    bool active_ = true;
+};
 
 // Throws MissingFile for a missing file or a dangling link, InvalidInput for a folder or other
 // non-regular file ("is a folder, not <kind>"), each naming the file.

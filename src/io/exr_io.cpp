@@ -584,7 +584,9 @@ void writeExr(const std::filesystem::path& file, const Image& image,
                 Imf::Slice(fileType, const_cast<char*>(base + c * valueBytes), xStride, yStride));
         }
         {
+            io_detail::FileCreation creation(temporary.path());
             Imf::OutputFile output(temporary.path().c_str(), header, Imf::globalThreadCount());
+            creation.finish();
             output.setFrameBuffer(frameBuffer);
             output.writePixels(image.height);
         }  // the destructor finishes the file before the rename
@@ -637,7 +639,9 @@ void writeExrChannels(const std::filesystem::path& file,
             }
         }
         {
+            io_detail::FileCreation creation(temporary.path());
             Imf::OutputFile output(temporary.path().c_str(), header, Imf::globalThreadCount());
+            creation.finish();
             output.setFrameBuffer(frameBuffer);
             output.writePixels(height);
         }  // the destructor finishes the file before the rename

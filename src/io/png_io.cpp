@@ -123,7 +123,9 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& b
         throw Error(ErrorCode::IoFailure,
                     file.string() + ": cannot write: " + std::strerror(error));
     };
+    io_detail::FileCreation creation(temporary.path());
     std::FILE* out = std::fopen(temporary.path().c_str(), "wb");
+    creation.finish();
     if (!out) fail(errno);
     const bool written = std::fwrite(bytes.data(), 1, bytes.size(), out) == bytes.size();
     const int writeError = errno;

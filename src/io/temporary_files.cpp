@@ -32,6 +32,10 @@ struct Slot {
 Slot temporaries[kSlots];
 std::atomic<pid_t> children[4];
 std::atomic<int> spawning{0};  // children being started, not registered yet
+// Files being created by path, and whether the clean-up has begun. Both sequentially consistent:
+// a writer that finds `abandoning` false is seen in `creating` by the clean-up, which waits.
+std::atomic<int> creating{0};
+std::atomic<bool> abandoning{false};
 
 static_assert(std::atomic<int>::is_always_lock_free && std::atomic<pid_t>::is_always_lock_free,
               "the signal handler reads the registry: its atomics must not take locks");
@@ -77,13 +81,28 @@ void endChildSpawn() noexcept {
     spawning.fetch_sub(1);
 }
 
+FileCreation::FileCreation(const std::filesystem::path& file) {
+    creating.fetch_add(1);
+    if (abandoning.load()) {
+        creating.fetch_sub(1);
+        active_ = false;
+        throw Error(ErrorCode::IoFailure, file.string() + ": not written: the run is interrupted");
+    }
+}
+
+void FileCreation::finish() noexcept {
+    if (active_) creating.fetch_sub(1);
+    active_ = false;
+}
+
 void removeLiveTemporaries() noexcept {
+    abandoning.store(true);
+    const timespec millisecond{0, 1000000};
+    // A writer between its check and its file's creation: wait for the file, then unlink it.
+    for (int wait = 0; creating.load() > 0 && wait < 1000; ++wait) ::nanosleep(&millisecond, nullptr);
     // A child being started is registered within microseconds by a thread that has these signals
     // blocked (so it is not this one): wait for it, up to a second, rather than leave it running.
-    for (int wait = 0; spawning.load() > 0 && wait < 1000; ++wait) {
-        const timespec millisecond{0, 1000000};
-        ::nanosleep(&millisecond, nullptr);
-    }
+    for (int wait = 0; spawning.load() > 0 && wait < 1000; ++wait) ::nanosleep(&millisecond, nullptr);
     // The children first: a killed ffmpeg writes no more into the file about to be unlinked.
     for (auto& entry : children) {
         const pid_t child = entry.exchange(0);

@@ -38,6 +38,19 @@ FrameImages declareTemporal(Pipeline& pipeline, const DenoiserSettings& settings
 FrameImages declareSvgf(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareDetail(Pipeline& pipeline, const DenoiserSettings& settings,
                           const MethodInputs& inputs);
+FrameImages declareLearned(Pipeline& pipeline, const DenoiserSettings& settings);
+
+// svgf's passes up to its A-Trous iterations (svgf.cpp), which the learned method shares.
+struct SvgfFront {
+    FrameImages images;
+    ResourceId derivatives;   // 3 planes: dz/dx, dz/dy, fwidth(n)
+    ResourceId illumination;  // rgb + variance: the accumulated illumination, the filters' input
+    ResourceId length;        // history: frames accumulated per pixel
+    ResourceId feedback;      // history: the feedback iteration's output (next frame's colour)
+    ResourceId filterA, filterB;  // 4 planes each: the iterations' ping-pong images
+    SvgfTerms terms;
+};
+SvgfFront declareSvgfFront(Pipeline& pipeline, const DenoiserSettings& settings);
 
 // ---- shared passes ----
 

@@ -186,7 +186,47 @@ void Pipeline::run(Device& device, const FrameBinding& frame) {
     }
 }
 
+void Pipeline::addDebugImage(DebugView view, std::vector<ResourceId> sources) {
+    debugImages_.emplace_back(view, std::move(sources));
+}
+
+Image Pipeline::gatheredDebugImage(Device& device, const std::vector<ResourceId>& sources) const {
+    int channels = 0;
+    for (ResourceId r : sources) channels += resources_[std::size_t(r.index)].planes;
+    Image image(layout_.width, layout_.height, channels);
+    int channel = 0;
+    for (ResourceId source : sources) {
+        const ResourceDecl& d = resources_[std::size_t(source.index)];
+        // The frame just processed: endFrame() has made its history copies the "previous" ones.
+        const ResourceId r{source.index, d.lifetime == Lifetime::History};
+        const std::size_t plane = std::size_t(layout_.planeSize) * elementBytes(d.element);
+        std::vector<std::uint8_t> padded(plane * std::size_t(d.planes));
+        device.copyToHost(padded.data(), at(r), padded.size());
+        for (int p = 0; p < d.planes; ++p, ++channel)
+            for (int y = 0; y < layout_.height; ++y)
+                for (int x = 0; x < layout_.width; ++x) {
+                    const std::size_t offset = std::size_t(p) * plane +
+                                               elementBytes(d.element) *
+                                                   std::size_t(layout_.index(x, y));
+                    float v;
+                    if (d.element == Element::Int32) {
+                        std::int32_t key;
+                        std::memcpy(&key, &padded[offset], sizeof key);
+                        v = key >= 0 ? 1.0f : 0.0f;
+                    } else if (d.element == Element::Byte) {
+                        v = float(padded[offset]);
+                    } else {
+                        std::memcpy(&v, &padded[offset], sizeof v);
+                    }
+                    image.at(x, y, channel) = v;
+                }
+    }
+    return image;
+}
+
 Image Pipeline::debugImage(Device& device, DebugView view) const {
+    for (const auto& [gathered, sources] : debugImages_)
+        if (gathered == view && layout_.width > 0) return gatheredDebugImage(device, sources);
     Image image(layout_.width, layout_.height, 3);
     auto found = std::find_if(resources_.begin(), resources_.end(), [&](const ResourceDecl& d) {
         return d.hasDebugView && d.debugView == view;

@@ -148,6 +148,9 @@ class Pipeline {
 
     // The debug view of the frame just processed (black where no resource has it).
     Image debugImage(Device& device, DebugView view) const;
+    // A debug view made of every plane of `sources`, in order, as they are (int32 planes: 1
+    // where >= 0, an object's key, else 0): a method's intermediate images for its training.
+    void addDebugImage(DebugView view, std::vector<ResourceId> sources);
 
   private:
     friend class PassContext;
@@ -155,6 +158,8 @@ class Pipeline {
         std::function<void(const PassContext&)> run;
         std::vector<std::uint8_t> access;  // per resource copy (2 per resource): 1 read, 2 write
     };
+    std::vector<std::pair<DebugView, std::vector<ResourceId>>> debugImages_;
+    Image gatheredDebugImage(Device& device, const std::vector<ResourceId>& sources) const;
     void* at(ResourceId r) const;
     std::size_t count(const ResourceDecl& d) const;
 

@@ -38,6 +38,8 @@ FrameImages declareMethodPasses(Pipeline& pipeline, const DenoiserSettings& sett
             return declareSvgf(pipeline, settings);
         case Method::Detail:
             return declareDetail(pipeline, settings, inputs);
+        case Method::Learned:
+            return declareLearned(pipeline, settings);
     }
     throw Error(ErrorCode::InvalidArgument, "settings: unknown method");
 }

@@ -13,7 +13,7 @@
 
 namespace rtd {
 
-FrameImages declareSvgf(Pipeline& p, const DenoiserSettings& settings) {
+SvgfFront declareSvgfFront(Pipeline& p, const DenoiserSettings& settings) {
     const SvgfSettings& sv = settings.svgf;
     const bool clamp = sv.historyClampK > 0.0f;
     FrameImages f = declareIngest(p, settings);
@@ -101,11 +101,17 @@ FrameImages declareSvgf(Pipeline& p, const DenoiserSettings& settings) {
                                                    kShortHistory}});
               });
 
+    return {f, derivatives, variance, length, feedback, filterA, filterB, terms};
+}
+
+FrameImages declareSvgf(Pipeline& p, const DenoiserSettings& settings) {
+    const SvgfSettings& sv = settings.svgf;
+    const SvgfFront s = declareSvgfFront(p, settings);
     // The iterations read the variance pass's output (kept for the debug view); the feedback
     // iteration writes next frame's colour history.
-    declareGuidedIterations(p, f, "svgf-atrous", derivatives, variance, filterA, filterB,
-                            sv.iterations, terms, sv.feedbackIteration, feedback);
-    return f;
+    declareGuidedIterations(p, s.images, "svgf-atrous", s.derivatives, s.illumination, s.filterA,
+                            s.filterB, sv.iterations, s.terms, sv.feedbackIteration, s.feedback);
+    return s.images;
 }
 
 }  // namespace rtd

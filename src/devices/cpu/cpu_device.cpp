@@ -146,6 +146,7 @@ class CpuDevice final : public Device {
     void run(const AddToOutputStep& s) override { launchWhereKeyed(s.add, s.add.key); }
     void run(const ModulateStep& s) override { launch(s.modulate); }
     void run(const EnergyInputStep& s) override { launch(s.input); }
+    void run(const LearnedMixStep& s) override { launch(s.mix); }
     void run(const EnergyStep& s) override {
         const int across = s.gain.grid.across, down = s.gain.grid.down;
         kernels_.runEnergyOutputSumsKernel(s.sums, across, down, scratch_);

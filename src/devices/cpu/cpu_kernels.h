@@ -79,7 +79,8 @@ namespace rtd {
     X(EnergyOutputSumsKernel)                     \
     X(EnergyAccumulateKernel)                     \
     X(EnergyGainKernel)                           \
-    X(EnergyApplyKernel)
+    X(EnergyApplyKernel)                          \
+    X(LearnedMixKernel)
 
 // One entry per kernel: runs it over a width x height grid of pixels on all cores, with the
 // device's scratch memory.

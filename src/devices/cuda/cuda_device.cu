@@ -342,6 +342,7 @@ class CudaDevice final : public Device {
     void run(const AddToOutputStep& s) override { launch(s.add); }
     void run(const ModulateStep& s) override { launch(s.modulate); }
     void run(const EnergyInputStep& s) override { launch(s.input); }
+    void run(const LearnedMixStep& s) override { launch(s.mix); }
     void run(const EnergyStep& s) override {
         const int across = s.gain.grid.across, down = s.gain.grid.down;
         launchAny(s.sums, across, down);

@@ -1,0 +1,159 @@
+#include "methods/learned_weights.h"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <charconv>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "rtdenoise/error.h"
+
+namespace rtd {
+namespace {
+
+constexpr std::string_view kMagic = "rtdenoise-weights 1";
+constexpr std::string_view kChecksumKey = "fnv1a32 ";
+
+std::uint32_t fnv1a32(std::string_view bytes) {
+    std::uint32_t hash = 2166136261u;
+    for (unsigned char c : bytes) {
+        hash ^= c;
+        hash *= 16777619u;
+    }
+    return hash;
+}
+
+[[noreturn]] void refuse(const std::string& source, const std::string& problem) {
+    throw Error(ErrorCode::InvalidInput, source + ": not a learned-method weights file: " + problem);
+}
+
+// The whitespace-separated words of `text`, with the line each starts on.
+struct Word {
+    std::string_view text;
+    int line;
+};
+std::vector<Word> words(std::string_view text) {
+    std::vector<Word> out;
+    int line = 1;
+    std::size_t i = 0;
+    while (i < text.size()) {
+        const char c = text[i];
+        if (c == '\n') ++line;
+        if (c == ' ' || c == '\t' || c == '\r' || c == '\n') {
+            ++i;
+            continue;
+        }
+        std::size_t end = i;
+        while (end < text.size() && text[end] != ' ' && text[end] != '\t' && text[end] != '\r' &&
+               text[end] != '\n')
+            ++end;
+        out.push_back({text.substr(i, end - i), line});
+        i = end;
+    }
+    return out;
+}
+
+}  // namespace
+
+LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& source) {
+    if (text.substr(0, kMagic.size()) != kMagic)
+        refuse(source, fmt::format("the first line is not '{}'", kMagic));
+    // The checksum line covers every byte before it: a truncated or edited file fails here.
+    const std::size_t checksumAt = text.rfind(std::string("\n") + std::string(kChecksumKey));
+    if (checksumAt == std::string_view::npos)
+        refuse(source, "no 'fnv1a32' line at its end (a truncated file?)");
+    const std::string_view body = text.substr(0, checksumAt + 1);
+    std::string_view stated = text.substr(checksumAt + 1 + kChecksumKey.size());
+    while (!stated.empty() && (stated.back() == '\n' || stated.back() == '\r' || stated.back() == ' '))
+        stated.remove_suffix(1);
+    std::uint32_t expected = 0;
+    const auto [end, error] =
+        std::from_chars(stated.data(), stated.data() + stated.size(), expected, 16);
+    if (error != std::errc() || end != stated.data() + stated.size() || stated.size() != 8)
+        refuse(source, fmt::format("the checksum '{}' is not 8 hex digits", stated));
+    const std::uint32_t actual = fnv1a32(body);
+    if (actual != expected)
+        refuse(source, fmt::format("its checksum is {:08x}, the file says {:08x} (truncated or "
+                                   "edited since it was written)",
+                                   actual, expected));
+
+    // Line 2: the network and its shape, which must be this library's.
+    const std::size_t secondLine = body.find('\n') + 1;
+    const std::size_t secondEnd = body.find('\n', secondLine);
+    const std::string_view shape = body.substr(secondLine, secondEnd - secondLine);
+    const std::string wanted = fmt::format("network learned-mix {} {} {} {}", kLearnedFeatures,
+                                           kLearnedHidden, kLearnedHidden, kLearnedCandidates);
+    if (shape != wanted)
+        refuse(source, fmt::format("line 2 is '{}'; this build reads '{}'", shape, wanted));
+    const std::size_t thirdEnd = body.find('\n', secondEnd + 1);
+    if (thirdEnd == std::string_view::npos ||
+        body.substr(secondEnd + 1, 8) != "trained ")
+        refuse(source, "line 3 is not 'trained <how>'");
+
+    LearnedNetwork n{};
+    struct Block {
+        const char* name;
+        float* values;
+        int count;
+    };
+    const Block blocks[] = {
+        {"w1", &n.w1[0][0], kLearnedHidden * kLearnedFeatures},
+        {"b1", n.b1, kLearnedHidden},
+        {"w2", &n.w2[0][0], kLearnedHidden * kLearnedHidden},
+        {"b2", n.b2, kLearnedHidden},
+        {"w3", &n.w3[0][0], kLearnedCandidates * kLearnedHidden},
+        {"b3", n.b3, kLearnedCandidates},
+    };
+    const std::vector<Word> all = words(body.substr(thirdEnd + 1));
+    std::size_t w = 0;
+    for (const Block& b : blocks) {
+        if (w >= all.size() || all[w].text != b.name)
+            refuse(source, fmt::format("expected the block '{}'{}", b.name,
+                                       w < all.size() ? fmt::format(" where '{}' is", all[w].text)
+                                                      : std::string(" before the end")));
+        ++w;
+        for (int i = 0; i < b.count; ++i, ++w) {
+            if (w >= all.size() || (all[w].text[0] >= 'a' && all[w].text[0] <= 'z' &&
+                                    all[w].text != "inf" && all[w].text != "nan"))
+                refuse(source, fmt::format("block '{}' has {} values, not {}", b.name, i, b.count));
+            const std::string word(all[w].text);
+            char* stop = nullptr;
+            errno = 0;
+            const float v = std::strtof(word.c_str(), &stop);
+            if (stop != word.c_str() + word.size() || errno == ERANGE || !std::isfinite(v))
+                refuse(source, fmt::format("'{}' in block '{}' is not a finite number", word,
+                                           b.name));
+            b.values[i] = v;
+        }
+    }
+    if (w != all.size())
+        refuse(source, fmt::format("'{}' after the last block", all[w].text));
+    return n;
+}
+
+LearnedNetwork learnedNetwork(const std::string& file) {
+    if (file.empty()) {
+        static const LearnedNetwork builtIn =
+            parseLearnedWeights(builtInLearnedWeights(), "the built-in weights");
+        return builtIn;
+    }
+    std::error_code ec;
+    if (!std::filesystem::exists(file, ec))
+        throw Error(ErrorCode::MissingFile, file + ": no such weights file");
+    if (!std::filesystem::is_regular_file(file, ec))
+        throw Error(ErrorCode::InvalidInput, file + ": not a regular file (a weights file)");
+    std::ifstream in(file, std::ios::binary);
+    std::stringstream text;
+    text << in.rdbuf();
+    if (!in && !in.eof())
+        throw Error(ErrorCode::IoFailure, file + ": cannot read the weights file");
+    return parseLearnedWeights(text.str(), file);
+}
+
+}  // namespace rtd
