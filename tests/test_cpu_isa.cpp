@@ -23,8 +23,8 @@ TEST_P(CpuIsaTest, AgreesWithTheScalarKernels) {
     if (int(isa) > int(bestCpuInstructionSet()))
         GTEST_SKIP() << toString(isa) << ": not supported by this processor or build (best: "
                      << toString(bestCpuInstructionSet()) << ")";
-    for (Method method :
-         {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf, Method::Detail}) {
+    for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf,
+                          Method::Detail, Method::Learned}) {
         DenoiserSettings s;
         s.method = method;
         s.device = DeviceType::Cpu;

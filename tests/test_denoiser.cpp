@@ -69,8 +69,8 @@ TEST(Denoiser, LaterFramesAllocateNothing) {
     d.width = 40;
     d.height = 24;
     Frame frame = makeFrame(d);
-    for (Method method :
-         {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf, Method::Detail})
+    for (Method method : {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf,
+                          Method::Detail, Method::Learned})
         for (SpatialFilter filter : {SpatialFilter::Jbf, SpatialFilter::Atrous}) {
             Denoiser denoiser(settingsFor(method, filter));
             denoiser.processFrame(frame);

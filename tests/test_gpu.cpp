@@ -12,6 +12,7 @@
 #endif
 
 #include "input_helpers.h"
+#include "learned_known_answer.h"
 #include "rtdenoise/rtdenoise.h"
 #include "test_support.h"
 #include "tuning.h"
@@ -35,7 +36,7 @@ std::string cudaUnavailableReason() {
 void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what,
                          std::initializer_list<Method> methods = {Method::Jbf, Method::Atrous,
                                                                   Method::Temporal, Method::Svgf,
-                                                                  Method::Detail},
+                                                                  Method::Detail, Method::Learned},
                          TilePasses gpuTilePasses = TilePasses::Auto) {
     for (Method method : methods) {
         DenoiserSettings s;
@@ -50,6 +51,23 @@ void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what,
             EXPECT_LE(difference, 1e-3) << what << ", " << toString(method) << ", frame " << i;
         }
     }
+}
+
+// The learned method's network on CUDA equals the PyTorch forward pass (the committed known
+// answer; test_learned checks the CPU's instruction sets).
+TEST(Gpu, LearnedKernelEqualsThePyTorchForwardPass) {
+    std::string reason = cudaUnavailableReason();
+    if (!reason.empty()) GTEST_SKIP() << "no CUDA: " << reason;
+    const test::KnownAnswer k = test::readKnownAnswer();
+    ASSERT_GE(k.inputs.size(), 8u);
+    std::unique_ptr<Device> device = createDevice(DeviceType::Cuda);
+    const std::vector<float> out = test::mixOnDevice(k, test::knownAnswerNetwork(), *device);
+    for (std::size_t p = 0; p < k.inputs.size(); ++p)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_TRUE(test::nearKnownAnswer(out[3 * p + std::size_t(c)],
+                                              k.outputs[p][std::size_t(c)]))
+                << "pixel " << p << ", channel " << c << ": " << out[3 * p + std::size_t(c)]
+                << " against " << k.outputs[p][std::size_t(c)];
 }
 
 TEST(Gpu, CpuAndCudaAgreeOnARenderedScene) {

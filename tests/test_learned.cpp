@@ -1,0 +1,186 @@
+// The learned method (issue 39): its weights files are checked, its kernel equals the PyTorch
+// forward pass on a committed known answer (training/infer.py wrote it) on every CPU instruction
+// set, and its output is a weighted average of its candidates whatever the weights.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "devices/device.h"
+#include "methods/learned_weights.h"
+#include "rtdenoise/denoiser.h"
+#include "rtdenoise/error.h"
+#include "learned_known_answer.h"
+#include "test_support.h"
+#include "tuning.h"
+
+#ifndef RTD_SOURCE_DIR
+#error "RTD_SOURCE_DIR: the repository, for tests/data"
+#endif
+
+namespace rtd {
+namespace {
+
+namespace fs = std::filesystem;
+
+void writeText(const fs::path& file, const std::string& text) {
+    std::ofstream(file, std::ios::binary) << text;
+}
+
+std::uint32_t fnv1a32(const std::string& bytes) {
+    std::uint32_t hash = 2166136261u;
+    for (unsigned char c : bytes) {
+        hash ^= c;
+        hash *= 16777619u;
+    }
+    return hash;
+}
+// `body` (every line before the checksum's) with a correct checksum line.
+std::string withChecksum(const std::string& body) {
+    char line[32];
+    std::snprintf(line, sizeof line, "fnv1a32 %08x\n", fnv1a32(body));
+    return body + line;
+}
+std::string bodyOf(const std::string& file) {
+    return file.substr(0, file.rfind("fnv1a32 "));
+}
+
+// The error parseLearnedWeights gives `text`, or "" where it parses.
+std::string refusal(const std::string& text) {
+    try {
+        parseLearnedWeights(text, "w.txt");
+        return "";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+        return e.what();
+    }
+}
+
+TEST(LearnedWeights, TheBuiltInWeightsParse) {
+    EXPECT_EQ(refusal(std::string(builtInLearnedWeights())), "");
+}
+
+TEST(LearnedWeights, BadFilesAreRefusedNamingTheProblem) {
+    const std::string good(builtInLearnedWeights());
+    EXPECT_NE(refusal(good.substr(0, good.size() / 2)).find("truncated"), std::string::npos);
+    std::string edited = good;
+    edited[good.find("w1 ") + 3] = edited[good.find("w1 ") + 3] == '1' ? '2' : '1';
+    EXPECT_NE(refusal(edited).find("checksum"), std::string::npos);
+    std::string body = bodyOf(good);
+    std::string shape = body;
+    shape.replace(shape.find("14 16 16 6"), 10, "14 32 32 6");
+    EXPECT_NE(refusal(withChecksum(shape)).find("line 2"), std::string::npos);
+    std::string missing = body;
+    missing.erase(missing.rfind(' '));  // b3's last value
+    missing += "\n";
+    EXPECT_NE(refusal(withChecksum(missing)).find("block 'b3' has 5 values, not 6"),
+              std::string::npos)
+        << refusal(withChecksum(missing));
+    std::string infinite = body;
+    infinite.insert(infinite.find("b1 ") + 3, "inf ");
+    EXPECT_NE(refusal(withChecksum(infinite)).find("not a finite number"), std::string::npos);
+    EXPECT_NE(refusal("hello\n").find("first line"), std::string::npos);
+    EXPECT_EQ(refusal(withChecksum(body)), "");  // the round trip
+}
+
+TEST(LearnedWeights, ADenoiserRefusesABadFileBeforeAnyFrame) {
+    test::TempFolder dir("learned-weights");
+    const fs::path truncated = dir.path() / "truncated.txt";
+    const std::string good(builtInLearnedWeights());
+    writeText(truncated, good.substr(0, good.size() - 20));
+    DenoiserSettings s = test::cpuSettings(Method::Learned);
+    s.learned.weights = truncated.string();
+    try {
+        Denoiser denoiser(s);
+        FAIL() << "a truncated weights file was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(truncated.string()), std::string::npos) << e.what();
+    }
+    s.learned.weights = (dir.path() / "absent.txt").string();
+    try {
+        Denoiser denoiser(s);
+        FAIL() << "a missing weights file was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::MissingFile);
+        EXPECT_NE(std::string(e.what()).find("absent.txt"), std::string::npos) << e.what();
+    }
+}
+
+std::vector<float> mixOnCpu(const test::KnownAnswer& k, const LearnedNetwork& network,
+                            CpuIsa isa) {
+    std::unique_ptr<Device> device = createCpuDevice(isa);
+    return test::mixOnDevice(k, network, *device);
+}
+
+TEST(Learned, KernelEqualsThePyTorchForwardPassOnEveryInstructionSet) {
+    const test::KnownAnswer k = test::readKnownAnswer();
+    ASSERT_GE(k.inputs.size(), 8u);
+    const LearnedNetwork network = test::knownAnswerNetwork();
+    const auto near = test::nearKnownAnswer;
+    for (std::size_t p = 0; p < k.inputs.size(); ++p) {
+        const std::vector<float>& in = k.inputs[p];
+        Float3 c[kLearnedCandidates];
+        float variance[kLearnedCandidates], f[kLearnedFeatures];
+        for (int j = 0; j < kLearnedCandidates; ++j) {
+            c[j] = make3(in[4 * j], in[4 * j + 1], in[4 * j + 2]);
+            variance[j] = in[4 * j + 3];
+        }
+        learnedFeatures(c, variance, in[24], f);
+        for (int j = 0; j < kLearnedFeatures; ++j)
+            EXPECT_TRUE(near(f[j], k.features[p][std::size_t(j)]))
+                << "pixel " << p << ", feature " << j << ": " << f[j] << " against "
+                << k.features[p][std::size_t(j)];
+    }
+    for (CpuIsa isa : {CpuIsa::Scalar, CpuIsa::Sse2, CpuIsa::Avx2, CpuIsa::Avx512}) {
+        if (int(isa) > int(bestCpuInstructionSet())) continue;
+        const std::vector<float> out = mixOnCpu(k, network, isa);
+        for (std::size_t p = 0; p < k.inputs.size(); ++p)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_TRUE(near(out[3 * p + std::size_t(c)], k.outputs[p][std::size_t(c)]))
+                    << toString(isa) << ", pixel " << p << ", channel " << c << ": "
+                    << out[3 * p + std::size_t(c)] << " against " << k.outputs[p][std::size_t(c)];
+    }
+}
+
+// Whatever the weights (large random ones here), each channel of the output lies between the
+// candidates' smallest and largest, times the albedo: a weighted average, nothing invented.
+TEST(Learned, OutputIsAWeightedAverageOfTheCandidatesWhateverTheWeights) {
+    const test::KnownAnswer k = test::readKnownAnswer();
+    ASSERT_FALSE(k.inputs.empty());
+    LearnedNetwork network{};
+    std::uint32_t state = 7u;
+    const auto next = [&] {
+        state = state * 1664525u + 1013904223u;
+        return 40.0f * (float(state >> 8) / float(1 << 24) - 0.5f);
+    };
+    for (auto& row : network.w1)
+        for (float& v : row) v = next();
+    for (auto& row : network.w2)
+        for (float& v : row) v = next();
+    for (auto& row : network.w3)
+        for (float& v : row) v = next();
+    for (float& v : network.b3) v = next();
+    const std::vector<float> out = mixOnCpu(k, network, bestCpuInstructionSet());
+    for (std::size_t p = 0; p < k.inputs.size(); ++p) {
+        const std::vector<float>& in = k.inputs[p];
+        for (int c = 0; c < 3; ++c) {
+            float lo = in[std::size_t(c)], hi = lo;
+            for (int j = 1; j < kLearnedCandidates; ++j) {
+                lo = std::min(lo, in[std::size_t(4 * j + c)]);
+                hi = std::max(hi, in[std::size_t(4 * j + c)]);
+            }
+            const float albedo = in[std::size_t(25 + c)];
+            const float got = out[3 * p + std::size_t(c)];
+            EXPECT_TRUE(std::isfinite(got));
+            EXPECT_GE(got, lo * albedo - 1e-5f * std::fabs(lo * albedo)) << "pixel " << p;
+            EXPECT_LE(got, hi * albedo + 1e-5f * std::fabs(hi * albedo)) << "pixel " << p;
+        }
+    }
+}
+
+}  // namespace
+}  // namespace rtd
