@@ -5,6 +5,7 @@ set, with relMSE, PSNR, SSIM, temporal error and the energy ratio, and the train
 
   scripts/validation_table.py [--corpus cache/corpus] [--cycles cache/validation_scenes]
                               [--builtin cache/builtin] [--methods input,svgf,detail]
+                              (a method "learned=FILE": the learned method with FILE's weights)
                               [--train-limit N] [--jobs 1]
 
 Sets (each skipped, saying so, where its folder is missing):
@@ -55,8 +56,11 @@ def has_no_energy():
 
 def score(sequence, reference, method, work):
     """compare's mean metrics of `method` on `sequence` against `reference`."""
-    out = work / f"{sequence.parent.name}-{sequence.name}-{method}"
+    out = work / f"{sequence.parent.name}-{sequence.name}-{method.replace('/', '_')}"
     args = ["--method", method]
+    if "=" in method:  # learned=FILE: the learned method with the weights file FILE
+        name, weights = method.split("=", 1)
+        args = ["--method", name, "--weights", weights]
     if method == "input":  # a 0-radius JBF without firefly removal is the identity
         args = ["--method", "jbf", "--radius", "0", "--no-outlier", "--no-albedo"]
         if has_no_energy():

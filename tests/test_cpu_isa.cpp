@@ -35,7 +35,7 @@ TEST_P(CpuIsaTest, AgreesWithTheScalarKernels) {
         for (std::size_t i = 0; i < renderedFrames().size(); ++i) {
             Image a = scalar.processFrame(renderedFrames()[i]);
             Image b = vector.processFrame(renderedFrames()[i]);
-            EXPECT_LE(test::maxRelativeDifference(a, b), 1e-3)
+            EXPECT_LE(test::maxRelativeDifference(a, b), test::backEndTolerance(method))
                 << toString(isa) << ", " << toString(method) << ", frame " << i;
         }
     }

@@ -48,7 +48,8 @@ void expectBackEndsAgree(const std::vector<Frame>& frames, const char* what,
         for (std::size_t i = 0; i < frames.size(); ++i) {
             Image a = cpu.processFrame(frames[i]), b = gpu.processFrame(frames[i]);
             double difference = test::maxRelativeDifference(a, b);
-            EXPECT_LE(difference, 1e-3) << what << ", " << toString(method) << ", frame " << i;
+            EXPECT_LE(difference, test::backEndTolerance(method))
+                << what << ", " << toString(method) << ", frame " << i;
         }
     }
 }

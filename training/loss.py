@@ -1,5 +1,6 @@
 """Stage 4: the HDR training loss.
 
+    SMAPE     mean |x - r| / (|x| + |r| + 0.01), linear RGB (bounded: robust to fireflies)
     relMSE    mean over samples and channels of (x - r)^2 / (r^2 + 0.01), linear RGB (the
               project's relMSE metric, src/metrics)
     L1        mean |T(x) - T(r)| on tone-mapped values
@@ -9,7 +10,7 @@
 
 T is x/(1+x) (tonemap="reinhard", the default) or the project's display transform
 (tonemap="display": Narkowicz's ACES fit, then the sRGB curve; src/io/tone_map.cpp).
-loss = w_relmse * relMSE + w_l1 * L1 + w_temporal * temporal.
+loss = w_relmse * relMSE + w_smape * SMAPE + w_l1 * L1 + w_temporal * temporal.
 """
 
 from dataclasses import dataclass
@@ -33,27 +34,43 @@ def display(x):
     return torch.where(y <= 0.0031308, linear, curve)
 
 
-TONEMAPS = {"reinhard": reinhard, "display": display}
+def log1p_tonemap(x):
+    """log(1 + x): unbounded, so a pixel 100x too bright costs about log(100), not a clipped 1."""
+    return torch.log1p(torch.clamp(x, min=0.0))
 
 
-def rel_mse(x, r):
-    return ((x - r) ** 2 / (r * r + REL_MSE_EPSILON)).mean()
+TONEMAPS = {"reinhard": reinhard, "display": display, "log": log1p_tonemap}
+
+
+def rel_mse(x, r, clip=0.0):
+    """clip > 0: each value's term at most clip (a few pixels then cannot outweigh the rest)."""
+    e = (x - r) ** 2 / (r * r + REL_MSE_EPSILON)
+    return (torch.clamp(e, max=clip) if clip > 0 else e).mean()
+
+
+def smape(x, r):
+    """|x - r| / (|x| + |r| + 0.01), linear RGB: bounded by 1, so a firefly left in a dark
+    pixel costs what it should without one pixel outweighing thousands (relMSE's flaw)."""
+    return (torch.abs(x - r) / (torch.abs(x) + torch.abs(r) + REL_MSE_EPSILON)).mean()
 
 
 @dataclass
 class LossWeights:
     relmse: float = 1.0
+    smape: float = 0.0
     l1: float = 1.0
     temporal: float = 1.0
     tonemap: str = "reinhard"
+    relmse_clip: float = 0.0
 
 
 def hdr_loss(x, r, x_prev=None, r_prev=None, weights=LossWeights()):
     """Returns (loss, parts): parts holds each term's value (detached floats)."""
     t = TONEMAPS[weights.tonemap]
     tx, tr = t(x), t(r)
-    parts = {"relmse": rel_mse(x, r), "l1": torch.abs(tx - tr).mean()}
-    loss = weights.relmse * parts["relmse"] + weights.l1 * parts["l1"]
+    parts = {"relmse": rel_mse(x, r, weights.relmse_clip), "smape": smape(x, r), "l1": torch.abs(tx - tr).mean()}
+    loss = (weights.relmse * parts["relmse"] + weights.smape * parts["smape"] +
+            weights.l1 * parts["l1"])
     if weights.temporal > 0 and x_prev is not None:
         e = tx - tr
         e_prev = t(x_prev) - t(r_prev)

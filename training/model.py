@@ -28,10 +28,12 @@ class LearnedMix(nn.Module):
         self.register_buffer("mean", torch.zeros(FEATURES))
         self.register_buffer("std", torch.ones(FEATURES))
         keep = torch.ones(FEATURES)
-        if drop_feature is not None:
-            if not 0 <= drop_feature < FEATURES:
-                raise ValueError(f"drop_feature {drop_feature}: features are 0..{FEATURES - 1}")
-            keep[drop_feature] = 0.0
+        dropped = [] if drop_feature is None else (
+            [drop_feature] if isinstance(drop_feature, int) else list(drop_feature))
+        for k in dropped:  # one feature or several (an ablation's group)
+            if not 0 <= k < FEATURES:
+                raise ValueError(f"drop_feature {k}: features are 0..{FEATURES - 1}")
+            keep[k] = 0.0
         self.register_buffer("keep", keep)
 
     def set_normalisation(self, mean, std):

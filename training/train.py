@@ -104,6 +104,27 @@ def augment(batch, generator, exposure_stops, permute=True):
     return out
 
 
+def frame_groups(data):
+    """Per sample, the index of its (sequence, frame): the energy gain's groups."""
+    key = data["sequence"].astype(np.int64) * 100000 + data["frame"].astype(np.int64)
+    _, group = np.unique(key, return_inverse=True)
+    return torch.from_numpy(group.astype(np.int64))
+
+
+LUMINANCE = torch.tensor([0.2126, 0.7152, 0.0722])
+
+
+def with_frame_gain(x, ref, group, groups):
+    """x scaled per frame group so that its luminance sum is the reference's, clamped to
+    [0.2, 5]: what the library's energy pass (run after the mix) does per 16x16 tile from the
+    noisy input's sum, here per frame of samples from the reference's (its expectation)."""
+    lum = LUMINANCE.to(x.device)
+    sx = torch.zeros(groups, device=x.device, dtype=x.dtype).index_add(0, group, x @ lum)
+    sr = torch.zeros(groups, device=x.device, dtype=x.dtype).index_add(0, group, ref @ lum)
+    gain = torch.clamp(sr / torch.clamp(sx, min=1e-8), 0.2, 5.0)
+    return x * gain[group][:, None]
+
+
 def normalisation(raw, chunk=1 << 18):
     """Per-feature mean and std over the samples (float64 sums)."""
     total, total_sq, n = torch.zeros(FEATURES, dtype=torch.float64), torch.zeros(
@@ -119,14 +140,22 @@ def normalisation(raw, chunk=1 << 18):
 
 
 @torch.no_grad()
-def evaluate(model, data, weights, chunk=1 << 16):
+def evaluate(model, data, weights, chunk=1 << 16, frame_gain=False):
     """The loss terms over a whole set (no augmentation), as sample-weighted means, and the
-    energy ratio sum(output) / sum(reference)."""
+    energy ratio sum(output) / sum(reference). frame_gain: outputs scaled per frame first
+    (with_frame_gain; chunks hold whole frames)."""
     sums, n, out_sum, ref_sum = {}, 0, 0.0, 0.0
+    group_all = data.get("group")
     for i in range(0, data["raw"].shape[0], chunk):
         b = {k: v[i:i + chunk] for k, v in data.items()}
         x = model(b["raw"])
         x_prev = model(b["raw_prev"]) if weights.temporal > 0 else None
+        if frame_gain and group_all is not None:
+            g = b["group"] - b["group"].min()
+            groups = int(g.max()) + 1
+            x = with_frame_gain(x, b["ref"], g, groups)
+            if x_prev is not None:
+                x_prev = with_frame_gain(x_prev, b["ref_prev"], g, groups)
         loss, parts = hdr_loss(x, b["ref"], x_prev, b["ref_prev"], weights)
         if weights.temporal == 0:  # reported all the same
             t = TONEMAPS[weights.tonemap]
@@ -158,13 +187,22 @@ def input_figures(data):
 
 def train(train_data, val_data, steps=20000, batch=4096, lr=2e-3, seed=1, weights=None,
           drop_feature=None, exposure_stops=2.0, permute=True, val_every=None, device=None,
-          curve_path=None, log=print):
+          curve_path=None, log=print, frame_gain=False):
     """Trains a LearnedMix; returns (model, curve rows, final validation figures)."""
     set_seeds(seed)
     weights = weights or LossWeights()
     device = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
     tr = to_tensors(train_data, device)
     va = to_tensors(val_data, device)
+    if frame_gain:  # samples sorted by frame: each frame's samples contiguous
+        for data, t in ((train_data, tr), (val_data, va)):
+            if len(data["raw"]) == 0:
+                continue
+            group = frame_groups(data)
+            order = torch.argsort(group, stable=True)
+            for key in list(t):
+                t[key] = t[key][order.to(device)]
+            t["group"] = group[order].to(device)
     n = tr["raw"].shape[0]
     if n == 0:
         raise ValueError("the train set holds no samples")
@@ -190,7 +228,7 @@ def train(train_data, val_data, steps=20000, batch=4096, lr=2e-3, seed=1, weight
 
     def record(step, train_loss):
         model.eval()
-        v = evaluate(model, va, weights) if va["raw"].shape[0] else {}
+        v = evaluate(model, va, weights, frame_gain=frame_gain) if va["raw"].shape[0] else {}
         model.train()
         row = [step, round(step / epoch_steps, 3), train_loss, v.get("loss", float("nan")),
                v.get("relmse", float("nan")), v.get("l1", float("nan")),
@@ -208,15 +246,37 @@ def train(train_data, val_data, steps=20000, batch=4096, lr=2e-3, seed=1, weight
     order = torch.randperm(n, generator=generator)
     position, running, running_n = 0, 0.0, 0
     final = None
+    if frame_gain:  # batches of whole frames, so that each frame's gain is over all its samples
+        group_size = int(torch.bincount(tr["group"]).max())
+        frames_per_batch = max(1, batch // group_size)
+        frame_count = int(tr["group"].max()) + 1
+        starts = torch.searchsorted(tr["group"], torch.arange(frame_count, device=tr["group"].device))
+        ends = torch.cat([starts[1:], torch.tensor([n], device=starts.device)])
+        epoch_steps = max(1, -(-frame_count // frames_per_batch))
+        frame_order = torch.randperm(frame_count, generator=generator)
     for step in range(1, steps + 1):
-        if position + batch > n:
-            order = torch.randperm(n, generator=generator)
-            position = 0
-        idx = order[position:position + batch].to(device)
-        position += batch
+        if frame_gain:
+            if position + frames_per_batch > frame_count:
+                frame_order = torch.randperm(frame_count, generator=generator)
+                position = 0
+            chosen = frame_order[position:position + frames_per_batch]
+            position += frames_per_batch
+            idx = torch.cat([torch.arange(int(starts[f]), int(ends[f])) for f in chosen]).to(device)
+        else:
+            if position + batch > n:
+                order = torch.randperm(n, generator=generator)
+                position = 0
+            idx = order[position:position + batch].to(device)
+            position += batch
         b = augment({k: v[idx] for k, v in tr.items()}, generator, exposure_stops, permute)
         x = model(b["raw"])
         x_prev = model(b["raw_prev"]) if weights.temporal > 0 else None
+        if frame_gain:
+            g = torch.unique(b["group"], return_inverse=True)[1]
+            groups = int(g.max()) + 1
+            x = with_frame_gain(x, b["ref"], g, groups)
+            if x_prev is not None:
+                x_prev = with_frame_gain(x_prev, b["ref_prev"], g, groups)
         loss, _ = hdr_loss(x, b["ref"], x_prev, b["ref_prev"], weights)
         optimiser.zero_grad(set_to_none=True)
         loss.backward()
@@ -249,15 +309,22 @@ def main(argv=None):
     p.add_argument("--data-seed", type=int, default=1, help="seed of the pixel samples")
     p.add_argument("--max-sequences", type=int, help="use only the first N sequences of each set")
     p.add_argument("--no-temporal", action="store_true", help="ablation: no temporal loss term")
-    p.add_argument("--drop-feature", type=int, metavar="K",
-                   help="ablation: feature K (0..13) zeroed in training and in the exported "
-                        "weights (its W1 column is 0)")
+    p.add_argument("--drop-feature", metavar="K[,K...]",
+                   type=lambda text: [int(k) for k in text.split(",")],
+                   help="ablation: features K (0..13) zeroed in training and in the exported "
+                        "weights (their W1 columns are 0)")
     p.add_argument("--w-relmse", type=float, default=LossWeights.relmse)
+    p.add_argument("--w-smape", type=float, default=LossWeights.smape)
+    p.add_argument("--relmse-clip", type=float, default=LossWeights.relmse_clip,
+                   help="each value's relMSE term at most this (0: unclipped)")
     p.add_argument("--w-l1", type=float, default=LossWeights.l1)
     p.add_argument("--w-temporal", type=float, default=LossWeights.temporal)
-    p.add_argument("--tonemap", choices=["reinhard", "display"], default="reinhard",
+    p.add_argument("--tonemap", choices=["reinhard", "display", "log"], default="reinhard",
                    help="tone map of the L1 and temporal terms: x/(1+x), or the project's "
                         "display transform (ACES + sRGB)")
+    p.add_argument("--no-frame-gain", action="store_true",
+                   help="judge the mix as it is, not scaled per frame to the reference's light "
+                        "(the library's energy pass, after the mix, restores it)")
     p.add_argument("--exposure-stops", type=float, default=2.0,
                    help="augmentation: exposure scale 2^u, u uniform in [-S, S] (0: none)")
     p.add_argument("--no-permute", action="store_true", help="no colour-permutation augmentation")
@@ -271,7 +338,7 @@ def main(argv=None):
     a = p.parse_args(argv)
     if a.threads:
         torch.set_num_threads(a.threads)
-    if a.drop_feature is not None and not 0 <= a.drop_feature < FEATURES:
+    if a.drop_feature is not None and not all(0 <= k < FEATURES for k in a.drop_feature):
         p.error(f"--drop-feature {a.drop_feature}: features are 0..{FEATURES - 1}")
     out = pathlib.Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -288,7 +355,7 @@ def main(argv=None):
         train_data = dataset.build_set(a.corpus, "train", a.rtdenoise, cache, **kw)
         val_data = dataset.build_set(a.corpus, "validation", a.rtdenoise, cache, **kw)
         corpus_text = train_data["meta"]["generator"]
-    weights = LossWeights(relmse=a.w_relmse, l1=a.w_l1,
+    weights = LossWeights(relmse=a.w_relmse, smape=a.w_smape, l1=a.w_l1, relmse_clip=a.relmse_clip,
                           temporal=0.0 if a.no_temporal else a.w_temporal, tonemap=a.tonemap)
     seeds = train_data["meta"].get("sequence_seeds", [])
     seed_text = f"{seeds[0]}-{seeds[-1]}" if seeds else "synthetic"
@@ -297,15 +364,17 @@ def main(argv=None):
     model, curve, final = train(
         train_data, val_data, steps=a.steps, batch=a.batch, lr=a.lr, seed=a.seed, weights=weights,
         drop_feature=a.drop_feature, exposure_stops=a.exposure_stops, permute=not a.no_permute,
-        val_every=a.val_every, device=a.device, curve_path=out / "curve.csv")
+        val_every=a.val_every, device=a.device, curve_path=out / "curve.csv",
+        frame_gain=not a.no_frame_gain)
     trained = (f"corpus {corpus_text}; train sequences {len(seeds)} (seeds {seed_text}), "
                f"{len(train_data['raw'])} samples"
                + ("" if a.synthetic else f", {a.samples_per_frame}/frame")
                + f", data seed {a.data_seed}; steps {a.steps}, batch {a.batch}, lr {a.lr:g}, "
                f"seed {a.seed}; "
-               f"loss relmse {weights.relmse:g} l1 {weights.l1:g} temporal {weights.temporal:g} "
-               f"{weights.tonemap}"
-               + (f"; feature {a.drop_feature} dropped" if a.drop_feature is not None else "")
+               f"loss relmse {weights.relmse:g} (clip {weights.relmse_clip:g}) smape {weights.smape:g} l1 {weights.l1:g} temporal {weights.temporal:g} "
+               f"{weights.tonemap}" + ("" if a.no_frame_gain else ", frame gain")
+               + (f"; features {','.join(map(str, a.drop_feature))} dropped"
+                  if a.drop_feature is not None else "")
                + f"; {time.strftime('%Y-%m-%d')}")
     path = export.export_model(model, out / "learned_weights.txt", trained)
     torch.save(model.state_dict(), out / "model.pt")
