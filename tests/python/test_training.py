@@ -178,3 +178,22 @@ def test_the_committed_known_answer_matches_its_weights():
     np.testing.assert_array_equal(feats, features(torch.from_numpy(inputs)).numpy())
     np.testing.assert_allclose(outputs, infer.run(path.parent / name, inputs), rtol=1e-6,
                                atol=1e-7)
+
+
+def test_the_exported_file_loads_and_runs_in_the_library(trained, tmp_path, plane):
+    """The C++ library reads the exported weights (the learned method denoises with them) and
+    refuses a truncated copy, naming the file."""
+    import rtdenoise
+
+    model = trained[0]
+    path = export.export_model(model, tmp_path / "w.txt", "the smoke test's synthetic run")
+    rng = np.random.default_rng(2)
+    color = rng.exponential(0.5, (plane.height, plane.width, 3)).astype(np.float32)
+    den = rtdenoise.Denoiser("learned", device="cpu", weights=path)
+    out = den.denoise(**plane.inputs(color))
+    assert out.shape == color.shape and np.isfinite(out).all()
+    assert 0.5 * color.mean() < out.mean() < 2.0 * color.mean()
+    damaged = tmp_path / "truncated.txt"
+    damaged.write_bytes(path.read_bytes()[:-40])
+    with pytest.raises(rtdenoise.Error, match="truncated.txt"):
+        rtdenoise.Denoiser("learned", device="cpu", weights=damaged)
