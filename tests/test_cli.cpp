@@ -660,5 +660,29 @@ TEST(Cli, AnUnknownCompressionIsRefusedBeforeAnythingIsWritten) {
     EXPECT_FALSE(fs::exists(out));
 }
 
+// A weights file that is not one (or is missing) stops the run before anything is written, naming
+// the file; an earlier run's results stay.
+TEST(Cli, ABadWeightsFileIsRefusedBeforeAnythingIsWritten) {
+    test::TempFolder dir("cli-bad-weights");
+    const fs::path in = dir.path() / "in", out = dir.path() / "out";
+    writeSequence(in, 2);
+    std::ofstream(dir.path() / "junk.txt") << "rtdenoise-weights 1\nnetwork learned-mix 14 16\n";
+    Result r = runCli(denoiseCommand(in, out) + " --method learned --weights " +
+                      quoted(dir.path() / "junk.txt"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, (dir.path() / "junk.txt").string() + ": not a learned-method "
+                                                                          "weights file"))
+        << r.output;
+    EXPECT_FALSE(fs::exists(out));
+
+    ASSERT_EQ(runCli(denoiseCommand(in, out) + " --method learned").exitCode, 0);
+    r = runCli(denoiseCommand(in, out) + " --method learned --weights " +
+               quoted(dir.path() / "absent.txt"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_TRUE(contains(r.output, "absent.txt: no such weights file")) << r.output;
+    EXPECT_TRUE(fs::exists(out / "result_0.exr"));
+    EXPECT_TRUE(fs::exists(out / "result_1.exr"));
+}
+
 }  // namespace
 }  // namespace rtd
