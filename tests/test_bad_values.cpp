@@ -15,8 +15,8 @@ namespace {
 using test::makeFrame;
 using test::SceneDescription;
 
-const Method kEveryMethod[] = {Method::Jbf,    Method::Atrous, Method::Temporal,
-                               Method::Svgf,   Method::Detail, Method::Learned};
+const Method kEveryMethod[] = {Method::Jbf,  Method::Atrous, Method::Temporal,
+                               Method::Svgf, Method::Detail, Method::Learned};
 
 DenoiserSettings settingsFor(Method method) {
     DenoiserSettings s = test::cpuSettings(method);

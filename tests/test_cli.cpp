@@ -671,7 +671,7 @@ TEST(Cli, ABadWeightsFileIsRefusedBeforeAnythingIsWritten) {
                       quoted(dir.path() / "junk.txt"));
     EXPECT_NE(r.exitCode, 0);
     EXPECT_TRUE(contains(r.output, (dir.path() / "junk.txt").string() + ": not a learned-method "
-                                                                          "weights file"))
+                                                                        "weights file"))
         << r.output;
     EXPECT_FALSE(fs::exists(out));
 

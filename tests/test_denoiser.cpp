@@ -455,7 +455,7 @@ TEST(Denoiser, PassesAreListedWithTheirBuffers) {
     Denoiser temporal(settingsFor(Method::Temporal));
     std::vector<std::string> names;
     for (const PassInfo& p : temporal.passes()) names.push_back(p.name);
-    std::vector<std::string> expected{"ingest",  "energy-input", "outlier", "atrous0", "atrous1",
+    std::vector<std::string> expected{"ingest",  "energy-input", "outlier", "atrous0",  "atrous1",
                                       "atrous2", "atrous3",      "atrous4", "temporal", "energy"};
     EXPECT_EQ(names, expected);
     // The last level writes `filtered`, which the temporal stage reads with the last frame's

@@ -65,8 +65,8 @@ TEST(Gpu, LearnedKernelEqualsThePyTorchForwardPass) {
     const std::vector<float> out = test::mixOnDevice(k, test::knownAnswerNetwork(), *device);
     for (std::size_t p = 0; p < k.inputs.size(); ++p)
         for (int c = 0; c < 3; ++c)
-            EXPECT_TRUE(test::nearKnownAnswer(out[3 * p + std::size_t(c)],
-                                              k.outputs[p][std::size_t(c)]))
+            EXPECT_TRUE(
+                test::nearKnownAnswer(out[3 * p + std::size_t(c)], k.outputs[p][std::size_t(c)]))
                 << "pixel " << p << ", channel " << c << ": " << out[3 * p + std::size_t(c)]
                 << " against " << k.outputs[p][std::size_t(c)];
 }

@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "devices/device.h"
+#include "learned_known_answer.h"
 #include "methods/learned_weights.h"
 #include "rtdenoise/denoiser.h"
 #include "rtdenoise/error.h"
-#include "learned_known_answer.h"
 #include "test_support.h"
 #include "tuning.h"
 
@@ -110,8 +110,7 @@ TEST(LearnedWeights, ADenoiserRefusesABadFileBeforeAnyFrame) {
     }
 }
 
-std::vector<float> mixOnCpu(const test::KnownAnswer& k, const LearnedNetwork& network,
-                            CpuIsa isa) {
+std::vector<float> mixOnCpu(const test::KnownAnswer& k, const LearnedNetwork& network, CpuIsa isa) {
     std::unique_ptr<Device> device = createCpuDevice(isa);
     return test::mixOnDevice(k, network, *device);
 }

@@ -83,12 +83,9 @@ std::pair<int, int> parseSize(const std::string& text) {
     return {side(all.substr(0, x), "width"), side(all.substr(x + 1), "height")};
 }
 
-const std::map<std::string, Method> kBenchMethods{{"jbf", Method::Jbf},
-                                                  {"atrous", Method::Atrous},
-                                                  {"temporal", Method::Temporal},
-                                                  {"svgf", Method::Svgf},
-                                                  {"detail", Method::Detail},
-                                                  {"learned", Method::Learned}};
+const std::map<std::string, Method> kBenchMethods{
+    {"jbf", Method::Jbf},   {"atrous", Method::Atrous}, {"temporal", Method::Temporal},
+    {"svgf", Method::Svgf}, {"detail", Method::Detail}, {"learned", Method::Learned}};
 struct BenchDevice {
     DeviceType type;
     CpuIsa isa;

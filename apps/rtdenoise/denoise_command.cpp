@@ -51,12 +51,9 @@ struct DenoiseOptions {
     ExrWriteOptions exr;  // result_<i>.exr's compression and channel type
 };
 
-const std::map<std::string, Method> kMethods{{"jbf", Method::Jbf},
-                                             {"atrous", Method::Atrous},
-                                             {"temporal", Method::Temporal},
-                                             {"svgf", Method::Svgf},
-                                             {"detail", Method::Detail},
-                                             {"learned", Method::Learned}};
+const std::map<std::string, Method> kMethods{
+    {"jbf", Method::Jbf},   {"atrous", Method::Atrous}, {"temporal", Method::Temporal},
+    {"svgf", Method::Svgf}, {"detail", Method::Detail}, {"learned", Method::Learned}};
 // The learned method's training inputs (DebugView::LearnedInputs), as docs/learned_spec.md names
 // them.
 constexpr const char* kLearnedInputsFolder = "learned-inputs";

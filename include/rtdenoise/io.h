@@ -354,6 +354,7 @@ class VideoWriter {
 // For a program's SIGINT/SIGTERM handler (the library installs none): stops the ffmpeg child of
 // an unfinished video and removes every temporary file a writer has open, so an interrupted run
 // leaves neither behind. Async-signal-safe: kill, waitpid and unlink of paths stored in advance.
+// For the process's end: a file being created is waited for, and later writes fail (IoFailure).
 void abandonTemporaryFiles() noexcept;
 
 // Throws IoFailure naming `folder` unless prepareOutputFolder(folder) would succeed: it is a

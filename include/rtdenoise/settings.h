@@ -62,10 +62,10 @@ struct OutlierSettings {
 // removal, history clamps, luminance edge-stopping) is given back at a coarse scale, per 16x16
 // tile, from the noisy input's mean over the frames (docs/energy.md).
 struct EnergySettings {
-    bool keep = true;     // scale the output so that each tile keeps the input's light
-    float cap = 128.0f;   // [>=1] input samples above cap x the local mean count as that
-                          // much (a quarter of it in a first frame): a lone firefly cannot
-                          // brighten its tiles much
+    bool keep = true;    // scale the output so that each tile keeps the input's light
+    float cap = 128.0f;  // [>=1] input samples above cap x the local mean count as that
+                         // much (a quarter of it in a first frame): a lone firefly cannot
+                         // brighten its tiles much
 };
 
 // Which previous-frame pixels may serve as history (temporal and svgf methods).

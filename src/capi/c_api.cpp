@@ -732,9 +732,10 @@ const char* rtdGetString(RTDDenoiser d, const char* name) {
         }
         const SettingEntry& e = findSetting(name);
         requireKind(e, ValueKind::String);
-        value = std::strcmp(e.name, "method") == 0    ? rtd::toString(d->settings.method)
-                : std::strcmp(e.name, "weights") == 0 ? d->settings.learned.weights.c_str()
-                                                      : rtd::toString(d->settings.temporal.spatialFilter);
+        value = std::strcmp(e.name, "method") == 0 ? rtd::toString(d->settings.method)
+                : std::strcmp(e.name, "weights") == 0
+                    ? d->settings.learned.weights.c_str()
+                    : rtd::toString(d->settings.temporal.spatialFilter);
     });
     return value;
 }

@@ -99,10 +99,12 @@ void removeLiveTemporaries() noexcept {
     abandoning.store(true);
     const timespec millisecond{0, 1000000};
     // A writer between its check and its file's creation: wait for the file, then unlink it.
-    for (int wait = 0; creating.load() > 0 && wait < 1000; ++wait) ::nanosleep(&millisecond, nullptr);
+    for (int wait = 0; creating.load() > 0 && wait < 1000; ++wait)
+        ::nanosleep(&millisecond, nullptr);
     // A child being started is registered within microseconds by a thread that has these signals
     // blocked (so it is not this one): wait for it, up to a second, rather than leave it running.
-    for (int wait = 0; spawning.load() > 0 && wait < 1000; ++wait) ::nanosleep(&millisecond, nullptr);
+    for (int wait = 0; spawning.load() > 0 && wait < 1000; ++wait)
+        ::nanosleep(&millisecond, nullptr);
     // The children first: a killed ffmpeg writes no more into the file about to be unlinked.
     for (auto& entry : children) {
         const pid_t child = entry.exchange(0);

@@ -35,7 +35,7 @@ FrameImages declareLearned(Pipeline& p, const DenoiserSettings& settings) {
         p.addPass(fmt::format("learned-atrous{}", it), StepKind::SvgfAtrousIteration,
                   with(gbufferReads(f), {src, s.derivatives}), {dst}, 2 * stride,
                   [=, terms = s.terms, derivatives = s.derivatives](const PassContext& c) {
-                      SvgfAtrousModulatedKernel iteration{gbuffer(c, f), c.planeSet(derivatives),
+                      SvgfAtrousModulatedKernel iteration{gbuffer(c, f),   c.planeSet(derivatives),
                                                           c.planeSet(src), c.planeSet(dst),
                                                           stride,          terms};
                       c.device().run(SvgfAtrousIterationStep{iteration, false, nullptr});
@@ -53,7 +53,7 @@ FrameImages declareLearned(Pipeline& p, const DenoiserSettings& settings) {
     reads.insert(reads.end(), std::begin(candidates), std::end(candidates));
     p.addPass("learned-mix", StepKind::LearnedMix, reads, {p.output()}, 0,
               [=, length = s.length](const PassContext& c) {
-                  LearnedMixKernel mix{gbuffer(c, f), {},          c.floats(length),
+                  LearnedMixKernel mix{gbuffer(c, f),      {},         c.floats(length),
                                        c.planes(f.albedo), c.output(), network};
                   for (int k = 0; k < kLearnedCandidates; ++k)
                       mix.candidates[k] = c.planeSet(candidates[k]);

@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include <cerrno>
-#include <cmath>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -30,7 +30,8 @@ std::uint32_t fnv1a32(std::string_view bytes) {
 }
 
 [[noreturn]] void refuse(const std::string& source, const std::string& problem) {
-    throw Error(ErrorCode::InvalidInput, source + ": not a learned-method weights file: " + problem);
+    throw Error(ErrorCode::InvalidInput,
+                source + ": not a learned-method weights file: " + problem);
 }
 
 // The whitespace-separated words of `text`, with the line each starts on.
@@ -70,7 +71,8 @@ LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& sou
         refuse(source, "no 'fnv1a32' line at its end (a truncated file?)");
     const std::string_view body = text.substr(0, checksumAt + 1);
     std::string_view stated = text.substr(checksumAt + 1 + kChecksumKey.size());
-    while (!stated.empty() && (stated.back() == '\n' || stated.back() == '\r' || stated.back() == ' '))
+    while (!stated.empty() &&
+           (stated.back() == '\n' || stated.back() == '\r' || stated.back() == ' '))
         stated.remove_suffix(1);
     std::uint32_t expected = 0;
     const auto [end, error] =
@@ -92,8 +94,7 @@ LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& sou
     if (shape != wanted)
         refuse(source, fmt::format("line 2 is '{}'; this build reads '{}'", shape, wanted));
     const std::size_t thirdEnd = body.find('\n', secondEnd + 1);
-    if (thirdEnd == std::string_view::npos ||
-        body.substr(secondEnd + 1, 8) != "trained ")
+    if (thirdEnd == std::string_view::npos || body.substr(secondEnd + 1, 8) != "trained ")
         refuse(source, "line 3 is not 'trained <how>'");
 
     LearnedNetwork n{};
@@ -103,12 +104,9 @@ LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& sou
         int count;
     };
     const Block blocks[] = {
-        {"w1", &n.w1[0][0], kLearnedHidden * kLearnedFeatures},
-        {"b1", n.b1, kLearnedHidden},
-        {"w2", &n.w2[0][0], kLearnedHidden * kLearnedHidden},
-        {"b2", n.b2, kLearnedHidden},
-        {"w3", &n.w3[0][0], kLearnedCandidates * kLearnedHidden},
-        {"b3", n.b3, kLearnedCandidates},
+        {"w1", &n.w1[0][0], kLearnedHidden * kLearnedFeatures},   {"b1", n.b1, kLearnedHidden},
+        {"w2", &n.w2[0][0], kLearnedHidden * kLearnedHidden},     {"b2", n.b2, kLearnedHidden},
+        {"w3", &n.w3[0][0], kLearnedCandidates * kLearnedHidden}, {"b3", n.b3, kLearnedCandidates},
     };
     const std::vector<Word> all = words(body.substr(thirdEnd + 1));
     std::size_t w = 0;
@@ -127,13 +125,12 @@ LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& sou
             errno = 0;
             const float v = std::strtof(word.c_str(), &stop);
             if (stop != word.c_str() + word.size() || errno == ERANGE || !std::isfinite(v))
-                refuse(source, fmt::format("'{}' in block '{}' is not a finite number", word,
-                                           b.name));
+                refuse(source,
+                       fmt::format("'{}' in block '{}' is not a finite number", word, b.name));
             b.values[i] = v;
         }
     }
-    if (w != all.size())
-        refuse(source, fmt::format("'{}' after the last block", all[w].text));
+    if (w != all.size()) refuse(source, fmt::format("'{}' after the last block", all[w].text));
     return n;
 }
 

@@ -205,9 +205,9 @@ Image Pipeline::gatheredDebugImage(Device& device, const std::vector<ResourceId>
         for (int p = 0; p < d.planes; ++p, ++channel)
             for (int y = 0; y < layout_.height; ++y)
                 for (int x = 0; x < layout_.width; ++x) {
-                    const std::size_t offset = std::size_t(p) * plane +
-                                               elementBytes(d.element) *
-                                                   std::size_t(layout_.index(x, y));
+                    const std::size_t offset =
+                        std::size_t(p) * plane +
+                        elementBytes(d.element) * std::size_t(layout_.index(x, y));
                     float v;
                     if (d.element == Element::Int32) {
                         std::int32_t key;
