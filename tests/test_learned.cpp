@@ -83,6 +83,16 @@ TEST(LearnedWeights, BadFilesAreRefusedNamingTheProblem) {
     std::string infinite = body;
     infinite.insert(infinite.find("b1 ") + 3, "inf ");
     EXPECT_NE(refusal(withChecksum(infinite)).find("not a finite number"), std::string::npos);
+    std::string huge = body;
+    huge.insert(huge.find("b1 ") + 3, "1e99 ");
+    EXPECT_NE(refusal(withChecksum(huge)).find("'1e99' in block 'b1' is not a finite number"),
+              std::string::npos)
+        << refusal(withChecksum(huge));
+    // A value below a float's range reads as a denormal or 0, not as an error.
+    std::string tiny = body;
+    const std::size_t first = tiny.find("b1 ") + 3;
+    tiny.replace(first, tiny.find(' ', first) - first, "1e-42");
+    EXPECT_EQ(refusal(withChecksum(tiny)), "");
     EXPECT_NE(refusal("hello\n").find("first line"), std::string::npos);
     EXPECT_EQ(refusal(withChecksum(body)), "");  // the round trip
 }

@@ -2,13 +2,12 @@
 
 #include <fmt/format.h>
 
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -120,14 +119,17 @@ LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& sou
             if (w >= all.size() || (all[w].text[0] >= 'a' && all[w].text[0] <= 'z' &&
                                     all[w].text != "inf" && all[w].text != "nan"))
                 refuse(source, fmt::format("block '{}' has {} values, not {}", b.name, i, b.count));
-            const std::string word(all[w].text);
-            char* stop = nullptr;
-            errno = 0;
-            const float v = std::strtof(word.c_str(), &stop);
-            if (stop != word.c_str() + word.size() || errno == ERANGE || !std::isfinite(v))
+            // from_chars: the same reading in every locale (strtof would take "0,5" in some).
+            // Read as a double: a float's overflow is then refused, its underflow kept (a
+            // denormal or 0).
+            const std::string_view word = all[w].text;
+            double v = 0.0;
+            const auto parsed = std::from_chars(word.data(), word.data() + word.size(), v);
+            if (parsed.ptr != word.data() + word.size() || parsed.ec != std::errc() ||
+                !std::isfinite(v) || std::fabs(v) > double(std::numeric_limits<float>::max()))
                 refuse(source,
                        fmt::format("'{}' in block '{}' is not a finite number", word, b.name));
-            b.values[i] = v;
+            b.values[i] = float(v);
         }
     }
     if (w != all.size()) refuse(source, fmt::format("'{}' after the last block", all[w].text));
