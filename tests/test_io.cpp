@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -22,6 +23,7 @@
 #include <iterator>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "io/atomic_file.h"
@@ -597,6 +599,46 @@ TEST(Exr, AbandonTemporaryFilesRemovesLiveTemporaries) {
     EXPECT_EQ(dir.names(), std::vector<std::string>{"kept.exr"});
     expectError([&] { writer.finish(); }, ErrorCode::IoFailure, {(dir / "v.mp4").string()});
     EXPECT_FALSE(fs::exists(dir / "v.mp4"));
+    rtd::io_detail::allowCreationAgain();  // the other tests of this process write files
+}
+
+// Once the clean-up has begun, a writer creates nothing: its write fails naming the file, and
+// neither the file nor a temporary appears (the race: a path unlinked just before its writer
+// created it).
+TEST(Exr, NothingIsCreatedAfterTheCleanUpBegan) {
+    TempDir dir;
+    rtd::abandonTemporaryFiles();
+    expectError([&] { rtd::writeExr(dir / "late.exr", patternImage(4, 4, 3, 0.0f)); },
+                ErrorCode::IoFailure, {(dir / "late.exr").string(), "interrupted"});
+    expectError([&] { rtd::writePng(dir / "late.png", patternImage(4, 4, 3, 0.5f)); },
+                ErrorCode::IoFailure, {(dir / "late.png").string(), "interrupted"});
+    EXPECT_TRUE(dir.names().empty());
+    rtd::io_detail::allowCreationAgain();
+    rtd::writeExr(dir / "again.exr", patternImage(4, 4, 3, 0.0f));
+    EXPECT_EQ(dir.names(), std::vector<std::string>{"again.exr"});
+}
+
+// The clean-up waits for a file being created (up to a second) and then removes it.
+TEST(Exr, TheCleanUpWaitsForAFileBeingCreated) {
+    TempDir dir;
+    const fs::path path = dir / ".x.exr.tmp-1-2";
+    rtd::io_detail::TemporaryFile temporary(path);
+    std::atomic<bool> cleaned{false};
+    {
+        rtd::io_detail::FileCreation creation(path);
+        std::thread cleanUp([&] {
+            rtd::abandonTemporaryFiles();
+            cleaned = true;
+        });
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        EXPECT_FALSE(cleaned.load());  // still waiting for the creation
+        writeBytes(path, "partial");
+        creation.finish();
+        cleanUp.join();
+    }
+    EXPECT_TRUE(cleaned.load());
+    EXPECT_FALSE(fs::exists(path));
+    rtd::io_detail::allowCreationAgain();
 }
 
 TEST(Matrix, RoundTrip) {

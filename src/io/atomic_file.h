@@ -42,6 +42,9 @@ void endChildSpawn() noexcept;
 // Kills and reaps the registered children, then unlinks the registered files. Async-signal-safe.
 // Files being created (FileCreation below) are waited for first, up to a second.
 void removeLiveTemporaries() noexcept;
+// Lets files be created again after removeLiveTemporaries: for a test that abandons and goes on
+// in the same process (a program exits after abandoning).
+void allowCreationAgain() noexcept;
 
 // Held around the call that creates a registered temporary by its path (fopen, OpenEXR's
 // OutputFile): without it, the clean-up could unlink the path just before the writer creates it,
@@ -49,6 +52,7 @@ void removeLiveTemporaries() noexcept;
 // letting a file be created.
 class FileCreation {
   public:
+    // file: the file the caller asked for (not its temporary), which the error names.
     explicit FileCreation(const std::filesystem::path& file);
     ~FileCreation() { finish(); }
     FileCreation(const FileCreation&) = delete;

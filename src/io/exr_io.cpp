@@ -584,7 +584,7 @@ void writeExr(const std::filesystem::path& file, const Image& image,
                 Imf::Slice(fileType, const_cast<char*>(base + c * valueBytes), xStride, yStride));
         }
         {
-            io_detail::FileCreation creation(temporary.path());
+            io_detail::FileCreation creation(file);
             Imf::OutputFile output(temporary.path().c_str(), header, Imf::globalThreadCount());
             creation.finish();
             output.setFrameBuffer(frameBuffer);
@@ -639,7 +639,7 @@ void writeExrChannels(const std::filesystem::path& file,
             }
         }
         {
-            io_detail::FileCreation creation(temporary.path());
+            io_detail::FileCreation creation(file);
             Imf::OutputFile output(temporary.path().c_str(), header, Imf::globalThreadCount());
             creation.finish();
             output.setFrameBuffer(frameBuffer);

@@ -123,7 +123,7 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& b
         throw Error(ErrorCode::IoFailure,
                     file.string() + ": cannot write: " + std::strerror(error));
     };
-    io_detail::FileCreation creation(temporary.path());
+    io_detail::FileCreation creation(file);
     std::FILE* out = std::fopen(temporary.path().c_str(), "wb");
     creation.finish();
     if (!out) fail(errno);

@@ -95,6 +95,10 @@ void FileCreation::finish() noexcept {
     active_ = false;
 }
 
+void allowCreationAgain() noexcept {
+    abandoning.store(false);
+}
+
 void removeLiveTemporaries() noexcept {
     abandoning.store(true);
     const timespec millisecond{0, 1000000};
