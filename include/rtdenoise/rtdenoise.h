@@ -124,7 +124,8 @@ RTD_API RTDError rtdSetFloat(RTDDenoiser denoiser, const char* name, float value
 RTD_API RTDError rtdSetInt(RTDDenoiser denoiser, const char* name, int value);
 RTD_API RTDError rtdSetBool(RTDDenoiser denoiser, const char* name, bool value);
 RTD_API RTDError rtdSetString(RTDDenoiser denoiser, const char* name, const char* value);
-/* 0, false or NULL (and an error) for an unknown name or the wrong type. */
+/* 0, false or NULL (and an error) for an unknown name or the wrong type. rtdGetString's text is
+ * valid until the denoiser's next setting change or release. */
 RTD_API float rtdGetFloat(RTDDenoiser denoiser, const char* name);
 RTD_API int rtdGetInt(RTDDenoiser denoiser, const char* name);
 RTD_API bool rtdGetBool(RTDDenoiser denoiser, const char* name);
