@@ -58,25 +58,26 @@ RTD_HOST_DEVICE RTD_INLINE void learnedFeatures(const Float3 (&c)[kLearnedCandid
             log1pPositive(std::sqrt(maxf(variance[k], 0.0f)) * inverseRef);
 }
 
+// out = relu(w in + b): one hidden layer.
+template <int Out, int In>
+RTD_HOST_DEVICE RTD_INLINE void denseRelu(const float (&w)[Out][In], const float (&b)[Out],
+                                          const float (&in)[In], float (&out)[Out]) {
+    RTD_UNROLL
+    for (int o = 0; o < Out; ++o) {
+        float s = b[o];
+        RTD_UNROLL
+        for (int i = 0; i < In; ++i) s += w[o][i] * in[i];
+        out[o] = maxf(s, 0.0f);
+    }
+}
+
 // The softmax weights of the candidates.
 RTD_HOST_DEVICE RTD_INLINE void learnedWeights(const LearnedNetwork& n,
                                                const float (&f)[kLearnedFeatures],
                                                float (&w)[kLearnedCandidates]) {
     float h1[kLearnedHidden], h2[kLearnedHidden];
-    RTD_UNROLL
-    for (int o = 0; o < kLearnedHidden; ++o) {
-        float s = n.b1[o];
-        RTD_UNROLL
-        for (int i = 0; i < kLearnedFeatures; ++i) s += n.w1[o][i] * f[i];
-        h1[o] = maxf(s, 0.0f);
-    }
-    RTD_UNROLL
-    for (int o = 0; o < kLearnedHidden; ++o) {
-        float s = n.b2[o];
-        RTD_UNROLL
-        for (int i = 0; i < kLearnedHidden; ++i) s += n.w2[o][i] * h1[i];
-        h2[o] = maxf(s, 0.0f);
-    }
+    denseRelu(n.w1, n.b1, f, h1);
+    denseRelu(n.w2, n.b2, h1, h2);
     float z[kLearnedCandidates];
     float top = -3.0e38f;
     RTD_UNROLL
