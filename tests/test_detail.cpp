@@ -250,15 +250,19 @@ TEST(Detail, ZeroConfidenceGivesAFreshDenoisersResult) {
     ASSERT_EQ(dropped.pixels.size(), first.pixels.size());
     for (std::size_t k = 0; k < first.pixels.size(); ++k)
         ASSERT_NEAR(dropped.pixels[k], first.pixels[k], 1e-5f * (1.0f + first.pixels[k])) << k;
-    // Confidence 1 keeps it: another result.
+    // Confidence 1 keeps it: under the same lighting (where the anti-lag keeps the history
+    // too), another result than a fresh denoiser's.
     Denoiser kept2(s);
     for (int i = 0; i < 5; ++i) kept2.processFrame(wallWithShadowLine(1.0f, 0.3f, 50u + i));
-    frame.confidence->pixels.assign(frame.confidence->pixels.size(), 1.0f);
-    Image continued = kept2.processFrame(frame);
+    Frame same = wallWithShadowLine(1.0f, 0.3f, 77u);
+    same.confidence = Image(same.beauty.width, same.beauty.height, 1);
+    same.confidence->pixels.assign(same.confidence->pixels.size(), 1.0f);
+    Image continued = kept2.processFrame(same);
+    Image sameFirst = Denoiser(s).processFrame(same);
     double differs = 0.0;
-    for (std::size_t k = 0; k < first.pixels.size(); ++k)
-        differs = std::max(differs, double(std::fabs(continued.pixels[k] - first.pixels[k])));
-    EXPECT_GT(differs, 1e-3);
+    for (std::size_t k = 0; k < sameFirst.pixels.size(); ++k)
+        differs = std::max(differs, double(std::fabs(continued.pixels[k] - sameFirst.pixels[k])));
+    EXPECT_GT(differs, 1e-2);
 }
 
 TEST(Detail, PassesAreDeclaredInOrder) {

@@ -120,6 +120,48 @@ TEST(Energy, ALoneFireflyComesOutWithinTwiceTheResultWithoutIt) {
     }
 }
 
+// Issue 38 item 1: a light seen directly is not a firefly. On a noisy 0.5 wall, a light of its
+// own object, one pixel (alone in its 5x5) or 2x2 (each pixel beside one as bright), at 400x the
+// wall: every method keeps at least 90 % of it in the first frame and later ones, as the same
+// firefly on the wall itself (ID 0) is cut to under a tenth. Before, both lights were cut to
+// their window's mean + 2 sigma, like a firefly.
+TEST(Energy, ASmallLightSeenDirectlyKeepsItsLight) {
+    struct Light {
+        int x0, y0, size;
+    };
+    for (Light light : {Light{30, 33, 1}, Light{20, 21, 2}}) {
+        const auto inLight = [light](int x, int y) {
+            return x >= light.x0 && x < light.x0 + light.size && y >= light.y0 &&
+                   y < light.y0 + light.size;
+        };
+        for (bool ownObject : {true, false}) {
+            SceneDescription d;
+            d.width = d.height = 64;
+            d.objectCount = 2;
+            d.id = [&](int x, int y) { return ownObject && inLight(x, y) ? 1 : 0; };
+            for (Method method :
+                 {Method::Jbf, Method::Atrous, Method::Temporal, Method::Svgf, Method::Detail}) {
+                Denoiser denoiser(test::cpuSettings(method));
+                for (int frame = 0; frame <= 4; ++frame) {
+                    Frame f = makeFrame(d);
+                    test::addNoise(f, 0.25f, unsigned(frame) + 1);
+                    for (int y = light.y0; y < light.y0 + light.size; ++y)
+                        for (int x = light.x0; x < light.x0 + light.size; ++x)
+                            for (int c = 0; c < 3; ++c) f.beauty.at(x, y, c) = 200.0f;
+                    const Image out = denoiser.processFrame(f);
+                    if (frame != 0 && frame != 4) continue;
+                    const float kept = out.at(light.x0, light.y0, 0) / 200.0f;
+                    if (ownObject)
+                        EXPECT_GT(kept, 0.9f) << toString(method) << ", light of "
+                                              << light.size << " px, frame " << frame;
+                    else if (light.size == 1)
+                        EXPECT_LT(kept, 0.1f) << toString(method) << ", firefly, frame " << frame;
+                }
+            }
+        }
+    }
+}
+
 // A noise-free frame comes out as the method gives it: the gain is 1 where nothing was lost.
 TEST(Energy, NothingLostNothingChanged) {
     SceneDescription d;

@@ -500,6 +500,33 @@ TEST(Outlier, FireflyIsClampedByItsWindowLessItselfOthersKept) {
     EXPECT_EQ(h.planes(h.b).load(h.layout.index(1, 0)).x, 1.0f);
 }
 
+// A light seen directly is kept (brightLikeItsObject): on the checker, a 50 of its own object
+// alone in its 5x5, and two pixels of 40 and 30 of one object side by side, keep their values;
+// the same 50 on the checker's object is still clamped to 2.5 (the test above), and so is a 40
+// whose brighter neighbour belongs to another object.
+TEST(Outlier, ALightSeenDirectlyIsKept) {
+    Harness h(9, 9, 3);
+    for (int y = 0; y < 9; ++y)
+        for (int x = 0; x < 9; ++x) {
+            const float v = 1.0f + float((x + y + 1) % 2);
+            h.planes(h.a).store(h.layout.index(x, y), make3(v, v, v));
+        }
+    const auto set = [&](int x, int y, float v, int id) {
+        h.planes(h.a).store(h.layout.index(x, y), make3(v, v, v));
+        h.ids.data()[h.layout.index(x, y)] = id;
+    };
+    set(2, 2, 50.0f, 1);  // a light a pixel wide
+    set(6, 6, 40.0f, 2);  // a light two pixels wide
+    set(7, 6, 30.0f, 2);
+    set(6, 2, 40.0f, 0);  // a firefly on the checker beside another object's light
+    set(7, 2, 45.0f, 3);
+    h.removeOutliers(3, 2.0f);
+    EXPECT_EQ(h.planes(h.b).load(h.layout.index(2, 2)).x, 50.0f);
+    EXPECT_EQ(h.planes(h.b).load(h.layout.index(6, 6)).x, 40.0f);
+    EXPECT_EQ(h.planes(h.b).load(h.layout.index(7, 6)).x, 30.0f);
+    EXPECT_LT(h.planes(h.b).load(h.layout.index(6, 2)).x, 20.0f);
+}
+
 // The firefly removal's tile pass (OutlierTile) gives the separate passes' result: the
 // despeckled colour, and with the clamp window its row sums of that colour (ColorRowSums), on
 // images that end inside a tile, with background and two objects, for radii 1 to 3; run by the

@@ -79,6 +79,13 @@ RTD_HOST_DEVICE RTD_INLINE float absf(float x) {
 RTD_HOST_DEVICE RTD_INLINE Float3 clamp3(Float3 v, Float3 lo, Float3 hi) {
     return {clampf(v.x, lo.x, hi.x), clampf(v.y, lo.y, hi.y), clampf(v.z, lo.z, hi.z)};
 }
+// v clamped to the box [lo, hi] grown to hold `own`: a history box that never rejects the
+// pixel's own current value (a light a pixel wide lies far outside its neighbourhood's box).
+RTD_HOST_DEVICE RTD_INLINE Float3 clampToBoxHolding(Float3 v, Float3 lo, Float3 hi, Float3 own) {
+    return {clampf(v.x, minf(lo.x, own.x), maxf(hi.x, own.x)),
+            clampf(v.y, minf(lo.y, own.y), maxf(hi.y, own.y)),
+            clampf(v.z, minf(lo.z, own.z), maxf(hi.z, own.z))};
+}
 // a where pick, else b, per component: a selected structure would stop the CPU vectorising
 // the kernel that uses it.
 RTD_HOST_DEVICE RTD_INLINE Float3 select3(bool pick, Float3 a, Float3 b) {

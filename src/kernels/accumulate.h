@@ -1,6 +1,7 @@
 // Temporal accumulation (assignment formula): C_i = a C_i + (1 - a) Clamp(C_{i-1}), the history
 // clamped per channel to mu +- k sigma of the current filtered frame's (2r+1)^2 neighbourhood
-// (its object pixels: background and the border do not count); a = 1 where the history is
+// (its object pixels: background and the border do not count), grown to hold the pixel's own
+// value (a small light's history lies far above its window's box); a = 1 where the history is
 // invalid. Runs after ColorRowSumsKernel (the column half of the window).
 #pragma once
 
@@ -38,8 +39,8 @@ struct Accumulate {
         // Branch-free (the CPU vectorises it): invalid history gets weight 0 (a = 1).
         float a = valid ? alpha : 1.0f;
         ColorWindowStats w = colorWindowStats<MaxRadius>(rowSums, i, L.pitch, radius);
-        Float3 history =
-            clamp3(reprojectedHistory, w.mean - w.sigma * clampK, w.mean + w.sigma * clampK);
+        Float3 history = clampToBoxHolding(reprojectedHistory, w.mean - w.sigma * clampK,
+                                           w.mean + w.sigma * clampK, c);
         Float3 result = c * a + history * (1.0f - a);
         out.store(i, result);
         if constexpr (Modulated) storeModulated(L, rgbOut, x, y, result * albedo.load(i));

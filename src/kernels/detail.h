@@ -181,7 +181,8 @@ using DetailAccumulateConfidenceKernel = DetailAccumulate<true>;
 //   history blended again with the current frame for that length, and both histories scaled
 //   towards the current level by the ratio of the means to the power min(1, 3 change);
 // - the clamp: the slow history into the fast one's mean +- clampSigma standard deviations, per
-//   channel; where that moved it, the history length is cut towards the fast history's in
+//   channel, a box grown to hold this frame's own value (a small light's history lies far above
+//   its window's box, and its light is its own); where that moved it, the history length is cut towards the fast history's in
 //   proportion to the move over the box's half width.
 // Writes the slow history and the length in place, the ratio for the fast history
 // (DetailScaleKernel) and the filter input: rgb + the variance of the accumulated mean (the
@@ -264,7 +265,7 @@ struct DetailClampKernel {
         mean = mean * ratio;
         // The clamp to the fast history's box.
         Float3 half = fastWindow.sigma * (ratio * clampSigma);
-        Float3 clamped = clamp3(c, mean - half, mean + half);
+        Float3 clamped = clampToBoxHolding(c, mean - half, mean + half, now);
         float moved = absf(luminance(clamped) - luminance(c));
         float t = clampSigma > 0.0f ? minf(moved / (luminance(half) + 1e-6f), 1.0f) : 0.0f;
         h = minf(h, h + (minf(h, fastHistory) - h) * t);
@@ -315,7 +316,8 @@ struct DetailHistoryFixKernel {
 
 // The output's stabilisation (NVIDIA NRD ReBLUR's temporal stabilisation, simplified): the
 // filtered illumination blended with the previous frame's stabilised one, clamped first to the
-// current 3x3 neighbourhood's mean +- clampSigma standard deviations (same filter key), so
+// current 3x3 neighbourhood's mean +- clampSigma standard deviations (same filter key; the box
+// grown to hold the pixel's own value), so
 // that the residual noise of a narrowed filter does not flicker from frame to frame. Only where
 // a history was found and kept and the anti-lag did not fire (a change passes at once). Writes the
 // stabilised illumination (its history) and the output, times the albedo.
@@ -376,7 +378,7 @@ struct DetailStabiliseKernel {
                   std::sqrt(maxf(variance.z, 0.0f))) *
             clampSigma;
         const Float3 heldHere = held.load(i);
-        const Float3 previousValue = clamp3(heldHere, mean - half, mean + half);
+        const Float3 previousValue = clampToBoxHolding(heldHere, mean - half, mean + half, c);
         const bool holds = key >= 0 && validity[i] == kReprojectionValid && length[i] > 1.0f &&
                            lagScale[i] == 1.0f && heldHere.x >= 0.0f;
         const float share = blend / (1.0f + motionFalloff * motionAt(x, y, i));

@@ -99,7 +99,9 @@ RTD_HOST_DEVICE RTD_INLINE bool hasPaperSigmaNormal(const SvgfTerms& t) {
 
 // SVGF's anti-lag: history outside what the current frame's neighbourhood allows (a light
 // switched, a shadow moved) is pulled into mu +- k sigma of the current noisy window (rowSums:
-// ColorRowSumsKernel's); ordinary history, inside the wide 1-spp spread, is untouched. Where
+// ColorRowSumsKernel's), grown to hold the pixel's own current value (a small light's history
+// lies far above its window's box, and its light is its own); ordinary history, inside the wide
+// 1-spp spread, is untouched. Where
 // the history is further from the neighbourhood's mean than that mean's own noise allows (3
 // standard errors, the mean of `count` samples), the history length is scaled by
 // (1 - relative change beyond that)^4 (the power chosen on the rendered scenes), so alpha = 1/h
@@ -110,7 +112,8 @@ struct AntiLag {
     float lengthScale;  // the history length's factor, in [0, 1]
 };
 RTD_HOST_DEVICE RTD_INLINE AntiLag antiLagOf(const PlaneSet& rowSums, PixelIndex i, int pitch,
-                                             int radius, float k, Float3 history) {
+                                             int radius, float k, Float3 history,
+                                             Float3 current) {
     ColorWindowStats w = colorWindowStats<kNarrowWindow>(rowSums, i, pitch, radius);
     float meanL = luminance(w.mean);
     float standardError = luminance(w.sigma) / std::sqrt(w.count);
@@ -118,7 +121,7 @@ RTD_HOST_DEVICE RTD_INLINE AntiLag antiLagOf(const PlaneSet& rowSums, PixelIndex
     float gap =
         maxf((historyL > meanL ? historyL - meanL : meanL - historyL) - 3.0f * standardError, 0.0f);
     float change = minf(gap / maxf(maxf(historyL, meanL), 1e-4f), 1.0f);
-    return {clamp3(history, w.mean - w.sigma * k, w.mean + w.sigma * k),
+    return {clampToBoxHolding(history, w.mean - w.sigma * k, w.mean + w.sigma * k, current),
             square(square(1.0f - change))};
 }
 
@@ -249,7 +252,7 @@ struct SvgfAccumulateKernel {
         // Anti-lag (clampK > 0). Selects, not an `if`, so the kernel stays vectorisable (the
         // window sums exist whenever clampK > 0).
         const bool antiLag = clampK > 0.0f;
-        const AntiLag lag = antiLagOf(rowSums, i, L.pitch, clampRadius, clampK, previous);
+        const AntiLag lag = antiLagOf(rowSums, i, L.pitch, clampRadius, clampK, previous, current);
         h *= antiLag ? lag.lengthScale : 1.0f;
         previous.x = antiLag ? lag.history.x : previous.x;
         previous.y = antiLag ? lag.history.y : previous.y;
