@@ -1,7 +1,7 @@
 """Fixtures of the rtdenoise Python tests: scenes rendered and denoised by the command line
 (RTDENOISE_CLI, set by CTest), and a synthetic flat plane with known depth and positions.
 
-Run by CTest (python.pytest), or by hand:
+Run by CTest (python.<file>, one test per file), or by hand:
     PYTHONPATH=build/release/python RTDENOISE_CLI=build/release/rtdenoise \\
         /usr/bin/python3 -m pytest -q tests/python
 """
