@@ -502,8 +502,9 @@ TEST(Outlier, FireflyIsClampedByItsWindowLessItselfOthersKept) {
 
 // A light seen directly is kept (brightLikeItsObject): on the checker, a 50 of its own object
 // alone in its 5x5, and two pixels of 40 and 30 of one object side by side, keep their values;
-// the same 50 on the checker's object is still clamped to 2.5 (the test above), and so is a 40
-// whose brighter neighbour belongs to another object.
+// the same 50 on the checker's object is still clamped to 2.5 (the test above), and so are a 40
+// whose brighter neighbour belongs to another object and a pair of fireflies side by side on the
+// checker (2 of its object's 24 pixels in their 5x5 bright: noise, not a light).
 TEST(Outlier, ALightSeenDirectlyIsKept) {
     Harness h(9, 9, 3);
     for (int y = 0; y < 9; ++y)
@@ -520,11 +521,15 @@ TEST(Outlier, ALightSeenDirectlyIsKept) {
     set(7, 6, 30.0f, 2);
     set(6, 2, 40.0f, 0);  // a firefly on the checker beside another object's light
     set(7, 2, 45.0f, 3);
+    set(1, 7, 40.0f, 0);  // two fireflies side by side on the checker
+    set(2, 7, 35.0f, 0);
     h.removeOutliers(3, 2.0f);
     EXPECT_EQ(h.planes(h.b).load(h.layout.index(2, 2)).x, 50.0f);
     EXPECT_EQ(h.planes(h.b).load(h.layout.index(6, 6)).x, 40.0f);
     EXPECT_EQ(h.planes(h.b).load(h.layout.index(7, 6)).x, 30.0f);
     EXPECT_LT(h.planes(h.b).load(h.layout.index(6, 2)).x, 20.0f);
+    EXPECT_LT(h.planes(h.b).load(h.layout.index(1, 7)).x, 20.0f);
+    EXPECT_LT(h.planes(h.b).load(h.layout.index(2, 7)).x, 20.0f);
 }
 
 // The firefly removal's tile pass (OutlierTile) gives the separate passes' result: the

@@ -13,33 +13,36 @@ namespace rtd {
 // kept. Leaving the pixel out matters: with it, a lone bright pixel widens its own limit to about
 // (1 + k sqrt(n - 1)) / n of itself (0.31 for a 7x7 window, k 2) and survives. Where it dominates
 // the float sums, the differences keep their rounding of it: a looser limit, still far below it,
-// and finite. Background, a pixel with no other object pixel around, and one `kept`
-// (brightLikeItsObject) keep their value.
+// and finite. Background, a pixel with no other object pixel around, and one that
+// keptAbove(limit) says is a light (brightLikeItsObject) keep their value.
+template <class KeptAbove>
 RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, float count, float sum,
-                                            float sumSquares, float k, bool kept = false) {
+                                            float sumSquares, float k,
+                                            const KeptAbove& keptAbove) {
     const float l = luminance(c);
     const float others = count - 1.0f;
     const float n = maxf(others, 1.0f);
     const float mean = maxf(sum - l, 0.0f) / n;
     const float variance = maxf(maxf(sumSquares - l * l, 0.0f) / n - mean * mean, 0.0f);
     const float limit = mean + k * std::sqrt(variance);
-    const float scale =
-        foreground && !kept && others >= 0.5f && l > limit && l > 0.0f ? limit / l : 1.0f;
+    const bool clamp = foreground && others >= 0.5f && l > limit && l > 0.0f;
+    const float scale = clamp && !keptAbove(limit) ? limit / l : 1.0f;
     return c * scale;
 }
 
-// Whether the pixel at i is bright like its object rather than a firefly on it: no other pixel
-// of its object is in its 5x5 (a light a pixel wide), or one in its 3x3 is at least half as
-// bright (a wider light or highlight). A light seen directly is the frame's brightest and, to the
-// window's statistics, a firefly: small lights lost up to 60 % of their light (issue 38). A lone
-// noise sample on a surface is rarely beside one of its own size. Allowing objects of up to 4
-// pixels kept 0.3 % more light on the train set for 3 % more relMSE (docs/energy.md). Reads the
-// border (ID -1; padding >= 3) at the image's edge.
+// Whether the pixel at i, above its firefly limit, is bright like its object rather than a
+// firefly on it: at least half of the other pixels of its object in its 5x5 are above the limit
+// and half as bright, or none is there (a light a pixel wide). A light seen directly is the
+// frame's brightest and, to the window's statistics, a firefly: small lights lost up to 60 % of
+// their light (issue 38). A light's pixels are bright together; noise above the limit is sparse
+// on its surface, if at times side by side: kept wherever one bright neighbour was (the rule
+// before), 1.3-1.5x the single-frame methods' relMSE (docs/energy.md). Reads the border (ID -1;
+// padding >= 3) at the image's edge.
 RTD_HOST_DEVICE RTD_INLINE bool brightLikeItsObject(const GBufferView& g, const Planes3& in,
-                                                    PixelIndex i) {
+                                                    PixelIndex i, float limit) {
     const std::int32_t id = g.objectId[i];
-    const float half = 0.5f * luminance(in.load(i));
-    bool alone = true, asBright = false;
+    const float threshold = maxf(0.5f * luminance(in.load(i)), limit);
+    float own = 0.0f, bright = 0.0f;
     RTD_UNROLL
     for (int dy = -2; dy <= 2; ++dy) {
         RTD_UNROLL
@@ -47,12 +50,11 @@ RTD_HOST_DEVICE RTD_INLINE bool brightLikeItsObject(const GBufferView& g, const 
             if (dx == 0 && dy == 0) continue;
             const PixelIndex j = i + g.layout.offset(dx, dy);
             const bool same = g.objectId[j] == id;
-            alone = alone & !same;
-            if (dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1)
-                asBright = asBright | (same & (luminance(in.load(j)) >= half));
+            own += same ? 1.0f : 0.0f;
+            bright += same && luminance(in.load(j)) > threshold ? 1.0f : 0.0f;
         }
     }
-    return alone | asBright;
+    return 2.0f * bright >= own;  // also where own is 0
 }
 
 template <int MaxRadius>
@@ -70,7 +72,7 @@ struct Outlier {
                                columnSum<MaxRadius>(rowSums, 0, i, L.pitch, radius),
                                columnSum<MaxRadius>(rowSums, 1, i, L.pitch, radius),
                                columnSum<MaxRadius>(rowSums, 2, i, L.pitch, radius), k,
-                               brightLikeItsObject(g, in, i)));
+                               [&](float limit) { return brightLikeItsObject(g, in, i, limit); }));
     }
 };
 using OutlierKernel = Outlier<kNarrowWindow>;

@@ -100,7 +100,9 @@ struct OutlierTile {
                                  columnSum<kRadius>(sums, 0, at, kSumWidth, radius),
                                  columnSum<kRadius>(sums, 1, at, kSumWidth, radius),
                                  columnSum<kRadius>(sums, 2, at, kSumWidth, radius), k,
-                                 brightLikeItsObject(g, in, atImage));
+                                 [&](float limit) {
+                                     return brightLikeItsObject(g, in, atImage, limit);
+                                 });
             if (inside && u >= 0 && u < TileWidth) out.store(i, d);
             if constexpr (ClampRadius > 0) keptPlanes(s).store(keepIndex(u, v), d);
         } else {
