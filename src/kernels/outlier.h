@@ -8,26 +8,32 @@
 
 namespace rtd {
 
-// Colour c with its luminance clamped to mean + k * stddev of the luminance of the other object
-// pixels of its window (their count, sum and sum of squares: the window's less c's own), its hue
-// kept. Leaving the pixel out matters: with it, a lone bright pixel widens its own limit to about
+// The firefly limit of a pixel of luminance l: mean + k * stddev of the luminance of the other
+// object pixels of its window (their count, sum and sum of squares: the window's less its own).
+// Leaving the pixel out matters: with it, a lone bright pixel widens its own limit to about
 // (1 + k sqrt(n - 1)) / n of itself (0.31 for a 7x7 window, k 2) and survives. Where it dominates
 // the float sums, the differences keep their rounding of it: a looser limit, still far below it,
-// and finite. Background, a pixel with no other object pixel around, and one that
-// keptAbove(limit) says is a light (brightLikeItsObject) keep their value.
-template <class KeptAbove>
-RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, float count, float sum,
-                                            float sumSquares, float k,
-                                            const KeptAbove& keptAbove) {
-    const float l = luminance(c);
+// and finite.
+struct FireflyLimit {
+    float limit;
+    float others;  // object pixels in the window besides this one
+};
+RTD_HOST_DEVICE RTD_INLINE FireflyLimit fireflyLimit(float l, float count, float sum,
+                                                     float sumSquares, float k) {
     const float others = count - 1.0f;
     const float n = maxf(others, 1.0f);
     const float mean = maxf(sum - l, 0.0f) / n;
     const float variance = maxf(maxf(sumSquares - l * l, 0.0f) / n - mean * mean, 0.0f);
-    const float limit = mean + k * std::sqrt(variance);
-    const bool clamp = foreground && others >= 0.5f && l > limit && l > 0.0f;
-    const float scale = clamp && !keptAbove(limit) ? limit / l : 1.0f;
-    return c * scale;
+    return {mean + k * std::sqrt(variance), others};
+}
+
+// Colour c with its luminance clamped to its firefly limit, its hue kept. Background, a pixel
+// with no other object pixel around, and a light (`kept`: brightLikeItsObject) keep their value.
+RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, FireflyLimit f,
+                                            bool kept) {
+    const float l = luminance(c);
+    const bool clamp = foreground & (f.others >= 0.5f) & (l > f.limit) & (l > 0.0f) & !kept;
+    return c * (clamp ? f.limit / l : 1.0f);
 }
 
 // Whether the pixel at i, above its firefly limit, is bright like its object rather than a
@@ -47,14 +53,15 @@ RTD_HOST_DEVICE RTD_INLINE bool brightLikeItsObject(const GBufferView& g, const 
     for (int dy = -2; dy <= 2; ++dy) {
         RTD_UNROLL
         for (int dx = -2; dx <= 2; ++dx) {
-            if (dx == 0 && dy == 0) continue;
             const PixelIndex j = i + g.layout.offset(dx, dy);
-            const bool same = g.objectId[j] == id;
-            own += same ? 1.0f : 0.0f;
-            bright += same && luminance(in.load(j)) > threshold ? 1.0f : 0.0f;
+            const float same = static_cast<float>(g.objectId[j] == id);
+            own += same;
+            bright += same * static_cast<float>(luminance(in.load(j)) > threshold);
         }
     }
-    return 2.0f * bright >= own;  // also where own is 0
+    // The pixel itself is counted in both (above the limit, it is above the threshold): of the
+    // others, at least half bright, or none there.
+    return 2.0f * bright >= own + 1.0f;
 }
 
 template <int MaxRadius>
@@ -68,11 +75,12 @@ struct Outlier {
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
         PixelIndex i = L.index(x, y);
-        out.store(i, despeckle(in.load(i), g.objectId[i] >= 0,
-                               columnSum<MaxRadius>(rowSums, 0, i, L.pitch, radius),
-                               columnSum<MaxRadius>(rowSums, 1, i, L.pitch, radius),
-                               columnSum<MaxRadius>(rowSums, 2, i, L.pitch, radius), k,
-                               [&](float limit) { return brightLikeItsObject(g, in, i, limit); }));
+        const Float3 c = in.load(i);
+        const FireflyLimit f =
+            fireflyLimit(luminance(c), columnSum<MaxRadius>(rowSums, 0, i, L.pitch, radius),
+                         columnSum<MaxRadius>(rowSums, 1, i, L.pitch, radius),
+                         columnSum<MaxRadius>(rowSums, 2, i, L.pitch, radius), k);
+        out.store(i, despeckle(c, g.objectId[i] >= 0, f, brightLikeItsObject(g, in, i, f.limit)));
     }
 };
 using OutlierKernel = Outlier<kNarrowWindow>;

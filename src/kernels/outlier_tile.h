@@ -96,13 +96,12 @@ struct OutlierTile {
             c.x = inside ? c.x : 0.0f;
             c.y = inside ? c.y : 0.0f;
             c.z = inside ? c.z : 0.0f;
-            Float3 d = despeckle(c, s.mask[load] > 0.0f,
-                                 columnSum<kRadius>(sums, 0, at, kSumWidth, radius),
-                                 columnSum<kRadius>(sums, 1, at, kSumWidth, radius),
-                                 columnSum<kRadius>(sums, 2, at, kSumWidth, radius), k,
-                                 [&](float limit) {
-                                     return brightLikeItsObject(g, in, atImage, limit);
-                                 });
+            const FireflyLimit f =
+                fireflyLimit(luminance(c), columnSum<kRadius>(sums, 0, at, kSumWidth, radius),
+                             columnSum<kRadius>(sums, 1, at, kSumWidth, radius),
+                             columnSum<kRadius>(sums, 2, at, kSumWidth, radius), k);
+            Float3 d = despeckle(c, s.mask[load] > 0.0f, f,
+                                 brightLikeItsObject(g, in, atImage, f.limit));
             if (inside && u >= 0 && u < TileWidth) out.store(i, d);
             if constexpr (ClampRadius > 0) keptPlanes(s).store(keepIndex(u, v), d);
         } else {
