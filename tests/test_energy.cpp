@@ -152,8 +152,8 @@ TEST(Energy, ASmallLightSeenDirectlyKeepsItsLight) {
                     if (frame != 0 && frame != 4) continue;
                     const float kept = out.at(light.x0, light.y0, 0) / 200.0f;
                     if (ownObject)
-                        EXPECT_GT(kept, 0.9f) << toString(method) << ", light of "
-                                              << light.size << " px, frame " << frame;
+                        EXPECT_GT(kept, 0.9f) << toString(method) << ", light of " << light.size
+                                              << " px, frame " << frame;
                     else if (light.size == 1)
                         EXPECT_LT(kept, 0.1f) << toString(method) << ", firefly, frame " << frame;
                 }

@@ -182,8 +182,8 @@ using DetailAccumulateConfidenceKernel = DetailAccumulate<true>;
 //   towards the current level by the ratio of the means to the power min(1, 3 change);
 // - the clamp: the slow history into the fast one's mean +- clampSigma standard deviations, per
 //   channel, a box grown to hold this frame's own value (a small light's history lies far above
-//   its window's box, and its light is its own); where that moved it, the history length is cut towards the fast history's in
-//   proportion to the move over the box's half width.
+//   its window's box, and its light is its own); where that moved it, the history length is cut
+//   towards the fast history's in proportion to the move over the box's half width.
 // Writes the slow history and the length in place, the ratio for the fast history
 // (DetailScaleKernel) and the filter input: rgb + the variance of the accumulated mean (the
 // luminance moments' variance over the history length).
@@ -346,7 +346,8 @@ struct DetailStabiliseKernel {
         if (objectCount <= 0) return 0.0f;  // no matrices: no history either (nothing held)
         const std::int32_t id = g.objectId[i];
         const bool covered = id >= 0 && id < objectCount;
-        const PreviousPixel before = previousPixel(g, i, previous, objectEntry(objects, id, covered, previous));
+        const PreviousPixel before =
+            previousPixel(g, i, previous, objectEntry(objects, id, covered, previous));
         const float d = std::sqrt(square(before.x - float(x)) + square(before.y - float(y)));
         return d < 3.0e38f ? d : 3.0e38f;  // NaN: far
     }

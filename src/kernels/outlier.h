@@ -29,8 +29,7 @@ RTD_HOST_DEVICE RTD_INLINE FireflyLimit fireflyLimit(float l, float count, float
 
 // Colour c with its luminance clamped to its firefly limit, its hue kept. Background, a pixel
 // with no other object pixel around, and a light (`kept`: brightLikeItsObject) keep their value.
-RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, FireflyLimit f,
-                                            bool kept) {
+RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, FireflyLimit f, bool kept) {
     const float l = luminance(c);
     const bool clamp = foreground & (f.others >= 0.5f) & (l > f.limit) & (l > 0.0f) & !kept;
     return c * (clamp ? f.limit / l : 1.0f);
@@ -39,11 +38,10 @@ RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, FireflyLi
 // Whether the pixel at i, above its firefly limit, is bright like its object rather than a
 // firefly on it: at least half of the other pixels of its object in its 5x5 are above the limit
 // and half as bright, or none is there (a light a pixel wide). A light seen directly is the
-// frame's brightest and, to the window's statistics, a firefly: small lights lost up to 60 % of
-// their light (issue 38). A light's pixels are bright together; noise above the limit is sparse
-// on its surface, if at times side by side: kept wherever one bright neighbour was (the rule
-// before), 1.3-1.5x the single-frame methods' relMSE (docs/energy.md). Reads the border (ID -1;
-// padding >= 3) at the image's edge.
+// frame's brightest and, to the window's statistics, a firefly: small lights lost most of their
+// light (issue 38). A light's pixels are bright together; noise above the limit is sparse on its
+// surface, if at times side by side (a rule that kept a pixel beside one bright neighbour kept
+// such noise: docs/energy.md). Reads the border (ID -1; padding >= 2) at the image's edge.
 RTD_HOST_DEVICE RTD_INLINE bool brightLikeItsObject(const GBufferView& g, const Planes3& in,
                                                     PixelIndex i, float limit) {
     const std::int32_t id = g.objectId[i];

@@ -91,7 +91,8 @@ struct OutlierTile {
             // Read at a pixel of the image, then zeroed outside it per component: a select of a
             // whole Float3 is an aggregate the CPU's vectoriser gives up on (the phase ran scalar).
             // This phase's rows are the tile's own, so y >= 0 needs no clamp.
-            const PixelIndex atImage = L.index(mini(maxi(x, 0), L.width - 1), mini(y, L.height - 1));
+            const PixelIndex atImage =
+                L.index(mini(maxi(x, 0), L.width - 1), mini(y, L.height - 1));
             Float3 c = in.load(atImage);
             c.x = inside ? c.x : 0.0f;
             c.y = inside ? c.y : 0.0f;
@@ -100,8 +101,8 @@ struct OutlierTile {
                 fireflyLimit(luminance(c), columnSum<kRadius>(sums, 0, at, kSumWidth, radius),
                              columnSum<kRadius>(sums, 1, at, kSumWidth, radius),
                              columnSum<kRadius>(sums, 2, at, kSumWidth, radius), k);
-            Float3 d = despeckle(c, s.mask[load] > 0.0f, f,
-                                 brightLikeItsObject(g, in, atImage, f.limit));
+            Float3 d =
+                despeckle(c, s.mask[load] > 0.0f, f, brightLikeItsObject(g, in, atImage, f.limit));
             if (inside && u >= 0 && u < TileWidth) out.store(i, d);
             if constexpr (ClampRadius > 0) keptPlanes(s).store(keepIndex(u, v), d);
         } else {

@@ -112,8 +112,7 @@ struct AntiLag {
     float lengthScale;  // the history length's factor, in [0, 1]
 };
 RTD_HOST_DEVICE RTD_INLINE AntiLag antiLagOf(const PlaneSet& rowSums, PixelIndex i, int pitch,
-                                             int radius, float k, Float3 history,
-                                             Float3 current) {
+                                             int radius, float k, Float3 history, Float3 current) {
     ColorWindowStats w = colorWindowStats<kNarrowWindow>(rowSums, i, pitch, radius);
     float meanL = luminance(w.mean);
     float standardError = luminance(w.sigma) / std::sqrt(w.count);
