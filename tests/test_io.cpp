@@ -579,9 +579,16 @@ TEST(Exr, HeaderClaimingAHugeImageNamesTheClaimedSize) {
     EXPECT_EQ(rtd::readExrSize(file, kRgb).width, 8);
 }
 
+// After a test that abandons (files may no more be created), lets them be created again however
+// it ends (an early return, a failed assertion): the other tests of this process write files.
+struct CreationAllowedAgainAtEnd {
+    ~CreationAllowedAgainAtEnd() { rtd::io_detail::allowCreationAgain(); }
+};
+
 // A signal handler's clean-up: every live temporary file goes, and an unfinished video's
 // ffmpeg is killed (no process left writing into the folder).
 TEST(Exr, AbandonTemporaryFilesRemovesLiveTemporaries) {
+    CreationAllowedAgainAtEnd allowAgain;
     TempDir dir;
     const fs::path kept = dir / "kept.exr";
     rtd::writeExr(kept, patternImage(4, 4, 3, 0.0f));  // committed: no longer a temporary
@@ -599,13 +606,13 @@ TEST(Exr, AbandonTemporaryFilesRemovesLiveTemporaries) {
     EXPECT_EQ(dir.names(), std::vector<std::string>{"kept.exr"});
     expectError([&] { writer.finish(); }, ErrorCode::IoFailure, {(dir / "v.mp4").string()});
     EXPECT_FALSE(fs::exists(dir / "v.mp4"));
-    rtd::io_detail::allowCreationAgain();  // the other tests of this process write files
 }
 
 // Once the clean-up has begun, a writer creates nothing: its write fails naming the file, and
 // neither the file nor a temporary appears (the race: a path unlinked just before its writer
 // created it).
 TEST(Exr, NothingIsCreatedAfterTheCleanUpBegan) {
+    CreationAllowedAgainAtEnd allowAgain;
     TempDir dir;
     rtd::abandonTemporaryFiles();
     expectError([&] { rtd::writeExr(dir / "late.exr", patternImage(4, 4, 3, 0.0f)); },
@@ -620,6 +627,7 @@ TEST(Exr, NothingIsCreatedAfterTheCleanUpBegan) {
 
 // The clean-up waits for a file being created (up to a second) and then removes it.
 TEST(Exr, TheCleanUpWaitsForAFileBeingCreated) {
+    CreationAllowedAgainAtEnd allowAgain;
     TempDir dir;
     const fs::path path = dir / ".x.exr.tmp-1-2";
     rtd::io_detail::TemporaryFile temporary(path);
@@ -638,7 +646,6 @@ TEST(Exr, TheCleanUpWaitsForAFileBeingCreated) {
     }
     EXPECT_TRUE(cleaned.load());
     EXPECT_FALSE(fs::exists(path));
-    rtd::io_detail::allowCreationAgain();
 }
 
 TEST(Matrix, RoundTrip) {

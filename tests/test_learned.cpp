@@ -31,18 +31,10 @@ void writeText(const fs::path& file, const std::string& text) {
     std::ofstream(file, std::ios::binary) << text;
 }
 
-std::uint32_t fnv1a32(const std::string& bytes) {
-    std::uint32_t hash = 2166136261u;
-    for (unsigned char c : bytes) {
-        hash ^= c;
-        hash *= 16777619u;
-    }
-    return hash;
-}
 // `body` (every line before the checksum's) with a correct checksum line.
 std::string withChecksum(const std::string& body) {
     char line[32];
-    std::snprintf(line, sizeof line, "fnv1a32 %08x\n", fnv1a32(body));
+    std::snprintf(line, sizeof line, "fnv1a32 %08x\n", learnedWeightsChecksum(body));
     return body + line;
 }
 std::string bodyOf(const std::string& file) {

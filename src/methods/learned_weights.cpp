@@ -19,15 +19,6 @@ namespace {
 constexpr std::string_view kMagic = "rtdenoise-weights 1";
 constexpr std::string_view kChecksumKey = "fnv1a32 ";
 
-std::uint32_t fnv1a32(std::string_view bytes) {
-    std::uint32_t hash = 2166136261u;
-    for (unsigned char c : bytes) {
-        hash ^= c;
-        hash *= 16777619u;
-    }
-    return hash;
-}
-
 [[noreturn]] void refuse(const std::string& source, const std::string& problem) {
     throw Error(ErrorCode::InvalidInput,
                 source + ": not a learned-method weights file: " + problem);
@@ -61,6 +52,15 @@ std::vector<Word> words(std::string_view text) {
 
 }  // namespace
 
+std::uint32_t learnedWeightsChecksum(std::string_view body) {
+    std::uint32_t hash = 2166136261u;
+    for (unsigned char c : body) {
+        hash ^= c;
+        hash *= 16777619u;
+    }
+    return hash;
+}
+
 LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& source) {
     if (text.substr(0, kMagic.size()) != kMagic)
         refuse(source, fmt::format("the first line is not '{}'", kMagic));
@@ -78,7 +78,7 @@ LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& sou
         std::from_chars(stated.data(), stated.data() + stated.size(), expected, 16);
     if (error != std::errc() || end != stated.data() + stated.size() || stated.size() != 8)
         refuse(source, fmt::format("the checksum '{}' is not 8 hex digits", stated));
-    const std::uint32_t actual = fnv1a32(body);
+    const std::uint32_t actual = learnedWeightsChecksum(body);
     if (actual != expected)
         refuse(source, fmt::format("its checksum is {:08x}, the file says {:08x} (truncated or "
                                    "edited since it was written)",
