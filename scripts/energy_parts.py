@@ -4,12 +4,16 @@ each variant with one part switched off, on sequences with references, with the 
 the whole sequence (output mean over reference mean), of 32x32 tiles away from object edges (5th
 and 95th percentile), relMSE, PSNR and the temporal error.
 
-  scripts/energy_parts.py SEQ... [--config NAME:METHOD[:key=value,...]]... [--tile 32] [--json F]
-                          [--cli BIN]
+  scripts/energy_parts.py SEQ... [--config NAME:METHOD[:key=value,...][@ENV=V;ENV=V]]...
+                          [--tile 32] [--json F] [--cli BIN]
 
 SEQ: a folder with `reference/` (course layout, a generated corpus's sequence) or a Cycles
 validation scene (`noisy/` and `reference/`). Without --config: every method at its defaults.
 Example: --config svgf:svgf --config svgf-no-outlier:svgf:outlier=false
+@ENV=V: environment variables set for that configuration alone (a prototype's switches,
+docs/experiments/*.patch: one build serves every configuration). Over several sequences it also
+prints each configuration against the first: the geometric mean of the per-sequence relMSE
+ratios, the mean PSNR gain and the mean temporal-error ratio.
 A tile is kept where at least half its pixels are away (2 px) from an object edge and the
 background, and its reference mean is at least 5 % of the frame's; its ratio sums every frame.
 Needs the Python module (build/release/python on PYTHONPATH) and numpy. --cli BIN denoises with
@@ -17,6 +21,7 @@ that build's command instead (`rtdenoise denoise`, the settings as its flags): a
 figures, e.g. a commit before a change."""
 import argparse
 import json
+import os
 import pathlib
 import subprocess
 import sys
@@ -140,8 +145,12 @@ def main():
     parser.add_argument("--json")
     parser.add_argument("--cli", help="denoise with this build's rtdenoise command")
     args = parser.parse_args()
-    configs = [parse_config(c) for c in args.config] or [
-        (m, m, {}) for m in ("jbf", "atrous", "temporal", "svgf", "detail")]
+    configs, environments = [], {}
+    for text in args.config:
+        spec, _, env = text.partition("@")
+        configs.append(parse_config(spec))
+        environments[configs[-1][0]] = dict(e.split("=", 1) for e in env.split(";") if e)
+    configs = configs or [(m, m, {}) for m in ("jbf", "atrous", "temporal", "svgf", "detail")]
     results = {}
     print(f"{'sequence':<28} {'config':<22} {'energy':>7} {'tile5':>6} {'tile95':>6} "
           f"{'relMSE':>8} {'PSNR':>6} {'temporal':>9}")
@@ -153,7 +162,11 @@ def main():
         if len(refs) != len(frames):
             sys.exit(f"{folder}: {len(frames)} frames, {len(refs)} references")
         for name, method, settings in configs:
+            saved = dict(os.environ)
+            os.environ.update(environments.get(name, {}))
             r = evaluate(frames, refs, method, settings, args.tile, args.cli, source)
+            os.environ.clear()
+            os.environ.update(saved)
             results.setdefault(str(folder), {})[name] = r
             print(f"{pathlib.Path(folder).name:<28} {name:<22} {r['energy']:7.3f} "
                   f"{r['tile_p5']:6.3f} {r['tile_p95']:6.3f} {r['rel_mse']:8.4f} "
@@ -165,6 +178,15 @@ def main():
             print(f"{'mean':<28} {name:<22} {mean['energy']:7.3f} {mean['tile_p5']:6.3f} "
                   f"{mean['tile_p95']:6.3f} {mean['rel_mse']:8.4f} {mean['psnr']:6.2f} "
                   f"{mean['temporal']:9.5f}")
+        base = configs[0][0]
+        print(f"against {base}: relMSE ratio (geometric mean), PSNR gain, temporal-error ratio")
+        for name, _, _ in configs:
+            def per_sequence(f):
+                return [f(results[s][name], results[s][base]) for s in results]
+            ratio = np.exp(np.mean(per_sequence(lambda r, b: np.log(r["rel_mse"] / b["rel_mse"]))))
+            gain = np.mean(per_sequence(lambda r, b: r["psnr"] - b["psnr"]))
+            temporal = np.mean(per_sequence(lambda r, b: r["temporal"] / b["temporal"]))
+            print(f"{name:<22} {ratio:6.3f} {gain:+7.3f} {temporal:6.3f}")
     if args.json:
         pathlib.Path(args.json).write_text(json.dumps(results, indent=1))
 
