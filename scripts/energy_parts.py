@@ -44,7 +44,10 @@ def parse_config(text):
             try:
                 values[key] = int(value)
             except ValueError:
-                values[key] = float(value)
+                try:
+                    values[key] = float(value)
+                except ValueError:
+                    values[key] = value  # a path (weights=FILE)
     return name, method or name, values
 
 

@@ -159,9 +159,10 @@ def main():
         sets = []
         wanted = options.sets.split(",")
         for name in [n for n in ("validation", "train") if n in wanted]:
-            seeds = sorted((options.corpus / name).glob("seed_*"),
+            # Complete sequences only: a render in progress is seed_N.partial.
+            seeds = sorted((s for s in (options.corpus / name).glob("seed_*")
+                            if (s / "complete").exists()),
                            key=lambda p: int(p.name.split("_")[1]))
-            seeds = [s for s in seeds if (s / "complete").exists()]
             if name == "train" and options.train_limit:
                 seeds = seeds[: options.train_limit]
             if seeds:

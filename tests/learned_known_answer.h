@@ -79,13 +79,20 @@ inline std::vector<float> mixOnDevice(const KnownAnswer& k, const LearnedNetwork
     GBufferView g{};
     g.layout = layout;
     g.filterKey = deviceKeys;
-    LearnedMixKernel mix{g, {}, plane(24), {plane(25), n}, deviceOut, network};
+    LearnedMixKernel mix{g, {}, plane(24), {deviceOut, n}, network};
     for (int c = 0; c < kLearnedCandidates; ++c) mix.candidates[c] = {plane(4 * c), n};
     device.prepare(layout, {StepKind::LearnedMix});
     device.run(LearnedMixStep{mix});
     device.synchronize();
     std::vector<float> out(std::size_t(3) * n);
     device.copyToHost(out.data(), deviceOut, outBytes);
+    // The kernel writes the mix demodulated (planar); the known answer is times the albedo.
+    std::vector<float> modulated(out.size());
+    for (int x = 0; x < n; ++x)
+        for (int c = 0; c < 3; ++c)
+            modulated[std::size_t(3 * x + c)] =
+                out[std::size_t(c * n + x)] * k.inputs[std::size_t(x)][std::size_t(25 + c)];
+    out = modulated;
     device.release(devicePlanes);
     device.release(deviceKeys);
     device.release(deviceOut);

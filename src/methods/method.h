@@ -36,11 +36,27 @@ FrameImages declareJbf(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareAtrous(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareTemporal(Pipeline& pipeline, const DenoiserSettings& settings);
 FrameImages declareSvgf(Pipeline& pipeline, const DenoiserSettings& settings);
+// mix: the learned method's network, which replaces detail's A-Trous chain (its diffuse signal's)
+// with a per-pixel mix of the chain's levels (learned.cpp).
 FrameImages declareDetail(Pipeline& pipeline, const DenoiserSettings& settings,
-                          const MethodInputs& inputs);
-FrameImages declareLearned(Pipeline& pipeline, const DenoiserSettings& settings);
+                          const MethodInputs& inputs, const LearnedNetwork* mix = nullptr);
+FrameImages declareLearned(Pipeline& pipeline, const DenoiserSettings& settings,
+                           const MethodInputs& inputs);
 
-// svgf's passes up to its A-Trous iterations (svgf.cpp), which the learned method shares.
+// What the learned mix reads of detail's passes.
+struct LearnedLevels {
+    ResourceId derivatives;       // 3 planes: dz/dx, dz/dy, fwidth(n)
+    ResourceId illumination;      // rgb + variance: detail's variance pass's, the filters' input
+    ResourceId length;            // history: frames accumulated per pixel
+    ResourceId filterA, filterB;  // 4 planes each, free for the levels
+    SvgfTerms terms;
+};
+// The five A-Trous levels of `illumination`, each kept, and the network's mix of the six
+// candidates (demodulated, 3 planes): returns the mix's image.
+ResourceId declareLearnedMix(Pipeline& pipeline, const FrameImages& images,
+                             const LearnedLevels& levels, const LearnedNetwork& network);
+
+// svgf's passes up to its A-Trous iterations (svgf.cpp).
 struct SvgfFront {
     FrameImages images;
     ResourceId derivatives;   // 3 planes: dz/dx, dz/dy, fwidth(n)

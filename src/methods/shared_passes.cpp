@@ -39,7 +39,7 @@ FrameImages declareMethodPasses(Pipeline& pipeline, const DenoiserSettings& sett
         case Method::Detail:
             return declareDetail(pipeline, settings, inputs);
         case Method::Learned:
-            return declareLearned(pipeline, settings);
+            return declareLearned(pipeline, settings, inputs);
     }
     throw Error(ErrorCode::InvalidArgument, "settings: unknown method");
 }
