@@ -1,6 +1,7 @@
 // The learned method (issue 39): its weights files are checked, its kernel equals the PyTorch
 // forward pass on a committed known answer (training/infer.py wrote it) on every CPU instruction
-// set, and its output is a weighted average of its candidates whatever the weights.
+// set, its output is a weighted average of its candidates whatever the weights, and its mix sits
+// in detail's passes where detail's last level was.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -109,6 +110,50 @@ TEST(LearnedWeights, ADenoiserRefusesABadFileBeforeAnyFrame) {
     } catch (const Error& e) {
         EXPECT_EQ(e.code(), ErrorCode::MissingFile);
         EXPECT_NE(std::string(e.what()).find("absent.txt"), std::string::npos) << e.what();
+    }
+}
+
+// A network whose softmax puts all its weight on one candidate, as a weights file: every weight
+// 0, the last layer's bias 80 for that candidate.
+std::string pickingWeights(int candidate) {
+    std::string body = "rtdenoise-weights 1\nnetwork learned-mix 14 16 16 6\ntrained test\n";
+    const auto block = [&](const char* name, int count, int hot) {
+        body += name;
+        for (int i = 0; i < count; ++i) body += i == hot ? " 80" : " 0";
+        body += "\n";
+    };
+    block("w1", 14 * 16, -1);
+    block("b1", 16, -1);
+    block("w2", 16 * 16, -1);
+    block("b2", 16, -1);
+    block("w3", 16 * 6, -1);
+    block("b3", 6, candidate);
+    return withChecksum(body);
+}
+
+// The mix sits where detail's last A-Trous level was: weights that pick level 5 give detail's
+// output (its levels are detail's, and the stabilisation and energy passes follow as in
+// detail); weights that pick L0, the unfiltered accumulation, give another.
+TEST(Learned, PickingTheLastLevelGivesDetailsOutput) {
+    test::TempFolder dir("learned-pick");
+    const std::vector<Frame> frames = test::renderSmallSequence("moving-objects");
+    Denoiser detail(test::cpuSettings(Method::Detail));
+    std::vector<Image> expected;
+    for (const Frame& frame : frames) expected.push_back(detail.processFrame(frame));
+    for (int candidate : {5, 0}) {
+        const fs::path file = dir.path() / ("pick" + std::to_string(candidate) + ".txt");
+        writeText(file, pickingWeights(candidate));
+        DenoiserSettings s = test::cpuSettings(Method::Learned);
+        s.learned.weights = file.string();
+        Denoiser learned(s);
+        for (std::size_t i = 0; i < frames.size(); ++i) {
+            const double difference =
+                test::maxRelativeDifference(expected[i], learned.processFrame(frames[i]));
+            if (candidate == 5)
+                EXPECT_LE(difference, 1e-5) << "frame " << i;
+            else
+                EXPECT_GE(difference, 0.05) << "frame " << i;
+        }
     }
 }
 

@@ -6,10 +6,6 @@
 //   ingest -> [outlier] -> geometry -> detail-temporal -> detail-clamp -> detail-variance
 //          -> learned-atrous0 .. learned-atrous4 (each into its own image) -> learned-mix
 //          -> detail-stabilise (modulated)
-#include <fmt/format.h>
-
-#include <iterator>
-
 #include "methods/learned_weights.h"
 #include "methods/method.h"
 
@@ -24,34 +20,25 @@ FrameImages declareLearned(Pipeline& p, const DenoiserSettings& settings,
 
 ResourceId declareLearnedMix(Pipeline& p, const FrameImages& f, const LearnedLevels& in,
                              const LearnedNetwork& network) {
-    // The levels: detail's two ping-pong images and three more; the mix, one more.
-    ResourceId pool[] = {in.filterA, in.filterB, p.declare(floatImage("learned-level-c", 4)),
-                         p.declare(floatImage("learned-level-d", 4)),
-                         p.declare(floatImage("learned-level-e", 4))};
+    // The levels, each kept: detail's two ping-pong images and three more; the mix, one more.
+    const std::vector<ResourceId> levels = {
+        in.filterA, in.filterB, p.declare(floatImage("learned-level-c", 4)),
+        p.declare(floatImage("learned-level-d", 4)), p.declare(floatImage("learned-level-e", 4))};
     const ResourceId mixed = p.declare(floatImage("learned-mixed", 3));
-    ResourceId candidates[kLearnedCandidates] = {in.illumination};
-    for (int it = 0; it < kLearnedCandidates - 1; ++it) {
-        const ResourceId src = candidates[it], dst = pool[it];
-        const int stride = 1 << it;
-        p.addPass(fmt::format("learned-atrous{}", it), StepKind::SvgfAtrousIteration,
-                  with(gbufferReads(f), {src, in.derivatives}), {dst}, 2 * stride,
-                  [=, terms = in.terms, derivatives = in.derivatives](const PassContext& c) {
-                      SvgfAtrousModulatedKernel iteration{gbuffer(c, f),   c.planeSet(derivatives),
-                                                          c.planeSet(src), c.planeSet(dst),
-                                                          stride,          terms};
-                      c.device().run(SvgfAtrousIterationStep{iteration, false, nullptr});
-                  });
-        candidates[it + 1] = dst;
-    }
+    declareGuidedIterations(p, f, "learned-atrous", in.derivatives, in.illumination, in.filterA,
+                            in.filterB, kLearnedCandidates - 1, in.terms, -1, {}, false, false,
+                            levels);
+    std::vector<ResourceId> candidates = {in.illumination};
+    candidates.insert(candidates.end(), levels.begin(), levels.end());
 
     // The network's inputs for training (docs/learned_spec.md): the candidates, the history
     // length, the albedo and whether the pixel holds an object.
-    std::vector<ResourceId> dumped(std::begin(candidates), std::end(candidates));
+    std::vector<ResourceId> dumped = candidates;
     dumped.insert(dumped.end(), {in.length, f.albedo, f.filterKeys});
     p.addDebugImage(DebugView::LearnedInputs, dumped);
 
     std::vector<ResourceId> reads = with(gbufferReads(f), {in.length});
-    reads.insert(reads.end(), std::begin(candidates), std::end(candidates));
+    reads.insert(reads.end(), candidates.begin(), candidates.end());
     p.addPass(
         "learned-mix", StepKind::LearnedMix, reads, {mixed}, 0,
         [=, length = in.length](const PassContext& c) {

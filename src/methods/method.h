@@ -102,13 +102,16 @@ void declareSpatialFilter(Pipeline& pipeline, const DenoiserSettings& settings,
 // there); the last one writes the output times the albedo, unless it is the feedback one: then
 // a modulate pass follows. toOutput false: the last one writes filterA or filterB like the
 // others. onlyKeyed: pixels whose filter key is < 0 may be skipped, their outputs left
-// unspecified (the split signal's specular passes). Returns what the last one wrote.
+// unspecified (the split signal's specular passes). levels: where given (one per iteration,
+// with toOutput false), iteration i writes levels[i] instead of the ping-pong, so every level is
+// kept (the learned mix). Returns what the last one wrote.
 ResourceId declareGuidedIterations(Pipeline& pipeline, const FrameImages& images,
                                    const std::string& prefix, ResourceId derivatives, ResourceId in,
                                    ResourceId filterA, ResourceId filterB, int iterations,
                                    SvgfTerms terms, int feedbackIteration = -1,
                                    ResourceId feedback = {}, bool toOutput = true,
-                                   bool onlyKeyed = false);
+                                   bool onlyKeyed = false,
+                                   const std::vector<ResourceId>& levels = {});
 // "modulate": the albedo multiplied back into `source` (its first three planes), written into
 // the output.
 void declareModulate(Pipeline& pipeline, const FrameImages& images, ResourceId source);

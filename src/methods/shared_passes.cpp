@@ -272,14 +272,16 @@ ResourceId declareGuidedIterations(Pipeline& p, const FrameImages& f, const std:
                                    ResourceId derivatives, ResourceId in, ResourceId filterA,
                                    ResourceId filterB, int iterations, SvgfTerms terms,
                                    int feedbackIteration, ResourceId feedback, bool toOutput,
-                                   bool onlyKeyed) {
+                                   bool onlyKeyed, const std::vector<ResourceId>& levels) {
     ResourceId src = in;
     for (int it = 0; it < iterations; ++it) {
         const bool isFeedback = it == feedbackIteration;
         const bool last = it == iterations - 1;
         const bool modulated = last && !isFeedback && toOutput;
-        const ResourceId dst =
-            isFeedback ? feedback : (src.index == filterA.index ? filterB : filterA);
+        const ResourceId dst = !levels.empty()              ? levels[std::size_t(it)]
+                               : isFeedback                 ? feedback
+                               : src.index == filterA.index ? filterB
+                                                            : filterA;
         const int stride = 1 << it;
         std::vector<ResourceId> reads = with(gbufferReads(f), {src, derivatives});
         if (modulated) reads.push_back(f.albedo);
