@@ -64,6 +64,8 @@ def _float64_reference(weights, raw):
     mix = torch.softmax(h @ w["w3"].T + w["b3"], dim=-1)
     cand = raw[..., :24].reshape(*raw.shape[:-1], 6, 4)[..., :3]
     mixed = (mix[..., None] * cand).sum(-2)
+    ends = cand[..., [0, 5], :]
+    mixed = torch.minimum(torch.maximum(mixed, ends.amin(dim=-2)), ends.amax(dim=-2))
     fg = raw[..., FOREGROUND:FOREGROUND + 1] > 0.5
     return f.numpy(), (raw[..., 25:28] * torch.where(fg, mixed, cand[..., 0, :])).numpy()
 
@@ -125,7 +127,8 @@ def known_answer(weights, out_path, width=8, height=6):
         "Each line: 29 inputs, 14 features, 3 outputs (R G B); 46 numbers, all %.9g of float32.",
         "Inputs: " + " ".join(CHANNELS) + ".",
         "Features f0..f13 in float32 as the spec writes them (computed for background pixels",
-        "too); outputs = albedo * sum_k w_k L_k.rgb (foreground) or albedo * L0.rgb (background).",
+        "too); outputs = albedo * clamp(sum_k w_k L_k.rgb, min(L0, L5), max(L0, L5)) (foreground)",
+        "or albedo * L0.rgb (background).",
         "Pixel 0 background; 1 black; 2 no variance; 3 L3 variance 1e-12; 4 L0 variance -1e-7;",
         "5 and 6 strong edges; 7 history 0.5; others: radiance 1e-3..1e3, history 0..40.",
         f"The same formulas in float64 differ by at most {feature_gap:.3g} (features, absolute)",

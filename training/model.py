@@ -7,7 +7,7 @@
     h1 = relu(W1 x + b1)  (16)
     h2 = relu(W2 h1 + b2) (16)
     w  = softmax(W3 h2 + b3) (6)           weights of the candidates L0..L5
-    out = albedo * sum_k w_k L_k.rgb       foreground pixels
+    out = albedo * clamp(sum_k w_k L_k.rgb, min(L0, L5), max(L0, L5))   foreground pixels
     out = albedo * L0.rgb                  background pixels (foreground = 0)
 """
 
@@ -56,6 +56,9 @@ class LearnedMix(nn.Module):
         w = self.mix_weights(features(raw))
         cand = candidates(raw)  # (..., 6, 3)
         mixed = (w.unsqueeze(-1) * cand).sum(dim=-2)
+        # Kept between the unfiltered L0 and the most filtered L5, per channel (kernels/learned.h).
+        ends = cand[..., [0, CANDIDATES - 1], :]
+        mixed = torch.minimum(torch.maximum(mixed, ends.amin(dim=-2)), ends.amax(dim=-2))
         albedo = raw[..., ALBEDO]
         foreground = raw[..., FOREGROUND:FOREGROUND + 1] > 0.5
         out = albedo * torch.where(foreground, mixed, cand[..., 0, :])
