@@ -99,17 +99,6 @@ RTD_HOST_DEVICE RTD_INLINE void learnedWeights(const LearnedNetwork& n,
     for (int o = 0; o < kLearnedCandidates; ++o) w[o] *= inverse;
 }
 
-// The mix kept between the unfiltered and the most filtered candidate, per channel: beside a light
-// or a highlight the middle levels blur its radiance into the pixel beyond both ends, where
-// the loss saturates and the network does not learn to avoid them (docs/learned.md). Still a
-// weighted average of the candidates.
-RTD_HOST_DEVICE RTD_INLINE float withinEnds(float v, float a, float b) {
-    return minf(maxf(v, minf(a, b)), maxf(a, b));
-}
-RTD_HOST_DEVICE RTD_INLINE Float3 withinEnds(Float3 v, Float3 a, Float3 b) {
-    return make3(withinEnds(v.x, a.x, b.x), withinEnds(v.y, a.y, b.y), withinEnds(v.z, a.z, b.z));
-}
-
 // The mix, demodulated, into `out` (detail's stabilisation multiplies the albedo back).
 // Background (a filter key below 0) passes the accumulated illumination through, as the
 // A-Trous iterations do.
@@ -135,7 +124,11 @@ struct LearnedMixKernel {
         Float3 mix = c[0] * w[0];
         RTD_UNROLL
         for (int k = 1; k < kLearnedCandidates; ++k) mix += c[k] * w[k];
-        mix = withinEnds(mix, c[0], c[kLearnedCandidates - 1]);
+        // Kept between the unfiltered and the most filtered candidate, per channel (the box [L0,
+        // L0] grown to hold L5): beside a light or a highlight the middle levels blur its
+        // radiance into the pixel beyond both, where the loss saturates and the network does not
+        // learn to avoid them (docs/learned.md). Still a weighted average of the candidates.
+        mix = clampToBoxHolding(mix, c[0], c[0], c[kLearnedCandidates - 1]);
         const bool foreground = g.filterKey[i] >= 0;
         // Per component (a selected vector would stop the CPU vectorising the kernel).
         out.store(i, make3(foreground ? mix.x : c[0].x, foreground ? mix.y : c[0].y,
