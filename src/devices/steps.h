@@ -70,6 +70,7 @@ struct DespeckleStep {
     int radius;
     float k;
     PlaneSet clampSums = {};
+    float* above = nullptr;  // optional: 1 where a pixel is above its firefly limit (Outlier)
 };
 
 struct JbfStep {
@@ -245,13 +246,13 @@ void runDetailTemporalStep(const DetailTemporalStageStep& s, PlaneSet history, L
     }
     const DetailAccumulateKernel& a = s.accumulate;
     if (a.confidence.data)
-        launch(DetailAccumulateConfidenceKernel{a.g, a.radiance, history, a.validity, a.confidence,
-                                                a.slow, a.fast, a.moments, a.length, a.maxHistory,
-                                                a.fastHistory, a.momentsAlpha, a.heldStable});
+        launch(DetailAccumulateConfidenceKernel{
+            a.g, a.radiance, history, a.validity, a.confidence, a.slow, a.fast, a.moments, a.length,
+            a.maxHistory, a.fastHistory, a.momentsAlpha, a.heldStable, a.raw, a.above});
     else
         launch(DetailAccumulateKernel{a.g, a.radiance, history, a.validity, a.confidence, a.slow,
                                       a.fast, a.moments, a.length, a.maxHistory, a.fastHistory,
-                                      a.momentsAlpha, a.heldStable});
+                                      a.momentsAlpha, a.heldStable, a.raw, a.above});
 }
 // The detail method's clamp step, alike on both devices: the two window sums, the clamp and
 // anti-lag, then the fast history's scaling (after every neighbour's read of it).
@@ -313,17 +314,17 @@ template <class Launch>
 void runDespeckleStep(const DespeckleStep& s, bool tiles, Launch&& launch) {
     if (tiles && s.radius <= kNarrowWindow) {  // the window statistics kept in the tile
         if (s.clampSums.data)
-            launch(OutlierClampTileKernel{s.g, s.in, s.out, s.clampSums, s.radius, s.k});
+            launch(OutlierClampTileKernel{s.g, s.in, s.out, s.clampSums, s.radius, s.k, s.above});
         else
-            launch(OutlierTileKernel{s.g, s.in, s.out, {}, s.radius, s.k});
+            launch(OutlierTileKernel{s.g, s.in, s.out, {}, s.radius, s.k, s.above});
         return;
     }
     if (s.radius <= kNarrowWindow) {
         launch(LuminanceRowSumsKernel{s.g, s.in, s.rowSums, s.radius});
-        launch(OutlierKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
+        launch(OutlierKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k, s.above});
     } else {
         launch(LuminanceRowSumsWideKernel{s.g, s.in, s.rowSums, s.radius});
-        launch(OutlierWideKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k});
+        launch(OutlierWideKernel{s.g, s.rowSums, s.in, s.out, s.radius, s.k, s.above});
     }
     if (s.clampSums.data) launch(ColorRowSumsKernel{s.g, s.out, s.clampSums, kSvgfWindowRadius});
 }

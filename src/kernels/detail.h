@@ -16,13 +16,14 @@
 namespace rtd {
 
 // The reprojected history handed from DetailReproject to DetailAccumulate in planes: slow rgb,
-// fast rgb, luminance mean, luminance variance, length, stabilised output rgb.
-constexpr int kDetailHistoryPlanes = 12;
+// fast rgb, luminance mean, luminance variance, length, stabilised output rgb, bright share.
+constexpr int kDetailHistoryPlanes = 13;
 
 struct DetailHistorySample {
     Float3 slow, fast;
     float mean = 0.0f, variance = 0.0f, length = 0.0f;
-    Float3 stable;  // the previous frame's stabilised output (DetailStabilise); 0 without one
+    Float3 stable;        // the previous frame's stabilised output (DetailStabilise); 0 without one
+    float bright = 0.0f;  // how often the pixel was above its firefly limit (DetailAccumulate)
 };
 
 // The previous frame's histories, weighted over the taps (the moments' variance includes the
@@ -35,11 +36,12 @@ gatherDetailHistory(const HistoryTaps<kTaps>& taps, const Planes3& previousSlow,
                     const Planes3& previousFast, const PlaneSet& previousMoments,
                     const float* previousLength, const Planes3& previousStable = {}) {
     float sr[kTaps], sg[kTaps], sb[kTaps], fr[kTaps], fg[kTaps], fb[kTaps];
-    float means[kTaps], variances[kTaps], lengths[kTaps];
+    float means[kTaps], variances[kTaps], lengths[kTaps], brights[kTaps];
     loadTaps(previousSlow, taps, sr, sg, sb);
     loadTaps(previousFast, taps, fr, fg, fb);
     loadTaps(previousMoments.data, taps, means);
     loadTaps(&previousMoments.at(1, 0), taps, variances);
+    loadTaps(&previousMoments.at(2, 0), taps, brights);
     loadTaps(previousLength, taps, lengths);
     DetailHistorySample s;
     RTD_UNROLL
@@ -49,6 +51,7 @@ gatherDetailHistory(const HistoryTaps<kTaps>& taps, const Planes3& previousSlow,
         s.fast += make3(fr[t], fg[t], fb[t]) * w;
         s.mean += means[t] * w;
         s.length += lengths[t] * w;
+        s.bright += brights[t] * w;
     }
     RTD_UNROLL
     for (int t = 0; t < kTaps; ++t)
@@ -76,7 +79,7 @@ struct DetailReproject {
     PlaneSet derivatives;
     HistoryTest test;
     Planes3 previousSlow, previousFast;
-    PlaneSet previousMoments;  // 2 planes: luminance mean, variance
+    PlaneSet previousMoments;  // 3 planes: luminance mean, variance, bright share
     const float* previousLength;
     PlaneSet history;  // out: kDetailHistoryPlanes
     std::uint8_t* validity;
@@ -107,10 +110,11 @@ struct DetailReproject {
         h.at(7, i) = s.variance;
         h.at(8, i) = s.length;
         h.rgb(9).store(i, s.stable);
+        h.at(12, i) = s.bright;
     }
     RTD_HOST_DEVICE RTD_INLINE static DetailHistorySample load(const PlaneSet& h, PixelIndex i) {
-        return {h.rgb().load(i), h.rgb(3).load(i), h.at(6, i),
-                h.at(7, i),      h.at(8, i),       h.rgb(9).load(i)};
+        return {h.rgb().load(i), h.rgb(3).load(i), h.at(6, i), h.at(7, i),
+                h.at(8, i),      h.rgb(9).load(i), h.at(12, i)};
     }
     // Search: the 3x3 search's taps rather than the bilinear ones.
     template <bool KnownId, bool Search = Search3x3>
@@ -143,10 +147,22 @@ struct DetailAccumulate {
     const std::uint8_t* validity;
     InputSpan confidence;  // data null: none
     Planes3 slow, fast;    // out (histories)
-    PlaneSet moments;      // out (history), 2 planes: luminance mean, variance
+    PlaneSet moments;      // out (history), 3 planes: luminance mean, variance, bright share
     float* length;         // out (history): frames in the slow history, 1 after a disocclusion
     float maxHistory, fastHistory, momentsAlpha;
     Planes3 heldStable = {};  // out: the reprojected stabilised output (DetailStabilise); or null
+    // The frame before the firefly removal, and where that saw a pixel far above its limit (1,
+    // else 0: aboveLimit; all 0 without the removal, whose `raw` is then `radiance`). Out:
+    // `radiance` holds the value accumulated (the raw one at a light), for the passes after.
+    Planes3 raw = {};
+    const float* above = nullptr;
+    // A light seen directly is far above its firefly limit frame after frame; a firefly seldom
+    // hits a pixel twice running. The share of frames above (an average with kAboveWeight for
+    // the current frame) reaching kLightShare (the last frame above, or two of the last three)
+    // makes the pixel a light: its raw value is accumulated. Lights of a pixel or two lost 10-15 %
+    // of their light as fireflies (docs/energy.md). The luminance moments stay the despeckled
+    // value's: a light's swing (a pixel it half covers) would widen its neighbours' filter.
+    static constexpr float kAboveWeight = 0.5f, kLightShare = 0.4f;
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         PixelIndex i = g.layout.index(x, y);
@@ -157,11 +173,15 @@ struct DetailAccumulate {
     }
     RTD_HOST_DEVICE RTD_INLINE void accumulate(PixelIndex i, const DetailHistorySample& s,
                                                float h) const {
-        Float3 current = radiance.load(i);
-        bool object = g.objectId[i] >= 0;
+        const bool object = g.objectId[i] >= 0;
+        const Float3 despeckled = radiance.load(i);
+        const float heldBright = h > 0.0f ? s.bright : 0.0f;  // dropped with the history
+        const Float3 current = select3(heldBright >= kLightShare, raw.load(i), despeckled);
+        radiance.store(i, current);
+        moments.at(2, i) = object ? heldBright + kAboveWeight * (above[i] - heldBright) : 0.0f;
         float hs = minf(h + 1.0f, maxHistory), hf = minf(h + 1.0f, fastHistory);
         float as = 1.0f / hs, af = 1.0f / hf, am = maxf(momentsAlpha, as);
-        float d = luminance(current) - s.mean;
+        float d = luminance(despeckled) - s.mean;
         slow.store(i, s.slow * (1.0f - as) + current * as);
         fast.store(i, s.fast * (1.0f - af) + current * af);
         moments.at(0, i) = object ? s.mean + am * d : 0.0f;
@@ -587,6 +607,7 @@ struct DetailSpecularReproject {
         out.mean = followed ? reflected.mean : surface.mean;
         out.variance = followed ? reflected.variance : surface.variance;
         out.length = followed ? reflected.length : surface.length;
+        out.bright = followed ? reflected.bright : surface.bright;
         DetailReprojectKernel::store(history, i, out);
         validity[i] = followed ? std::uint8_t(kReprojectionValid) : validity[i];
     }

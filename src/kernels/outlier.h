@@ -35,6 +35,17 @@ RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, FireflyLi
     return c * (clamp ? f.limit / l : 1.0f);
 }
 
+// 1 where c is over twice its firefly limit (kept as a light or not), else 0: the detail
+// method's evidence of a light (DetailAccumulate). Twice, not once: in a dark area a sample just
+// over its limit the frame before a firefly made that firefly a light (docs/energy.md).
+constexpr float kAboveLimitFactor = 2.0f;
+RTD_HOST_DEVICE RTD_INLINE float aboveLimit(Float3 c, bool foreground, FireflyLimit f) {
+    const float l = luminance(c);
+    const bool above =
+        foreground & (f.others >= 0.5f) & (l > kAboveLimitFactor * f.limit) & (l > 0.0f);
+    return above ? 1.0f : 0.0f;
+}
+
 // Whether the pixel at i, above its firefly limit, is bright like its object rather than a
 // firefly on it: at least half of the other pixels of its object in its 5x5 are above the limit
 // and half as bright, or none is there (a light a pixel wide). A light seen directly is the
@@ -69,6 +80,7 @@ struct Outlier {
     Planes3 in, out;
     int radius;  // <= MaxRadius
     float k;
+    float* above = nullptr;  // out, optional: 1 where the pixel is above its limit, else 0
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;
@@ -79,6 +91,7 @@ struct Outlier {
                          columnSum<MaxRadius>(rowSums, 1, i, L.pitch, radius),
                          columnSum<MaxRadius>(rowSums, 2, i, L.pitch, radius), k);
         out.store(i, despeckle(c, g.objectId[i] >= 0, f, brightLikeItsObject(g, in, i, f.limit)));
+        if (above) above[i] = aboveLimit(c, g.objectId[i] >= 0, f);
     }
 };
 using OutlierKernel = Outlier<kNarrowWindow>;

@@ -59,6 +59,7 @@ struct OutlierTile {
     PlaneSet clampSums;  // ColorRowSums' 7 planes; ClampRadius > 0 only
     int radius;          // the firefly window's, <= kRadius
     float k;
+    float* above = nullptr;  // out, optional: as Outlier's
 
     template <int Phase>
     RTD_HOST_DEVICE RTD_INLINE void item(Shared& s, int tileX, int tileY, int u, int v) const {
@@ -103,7 +104,10 @@ struct OutlierTile {
                              columnSum<kRadius>(sums, 2, at, kSumWidth, radius), k);
             Float3 d =
                 despeckle(c, s.mask[load] > 0.0f, f, brightLikeItsObject(g, in, atImage, f.limit));
-            if (inside && u >= 0 && u < TileWidth) out.store(i, d);
+            if (inside && u >= 0 && u < TileWidth) {
+                out.store(i, d);
+                if (above) above[i] = aboveLimit(c, s.mask[load] > 0.0f, f);
+            }
             if constexpr (ClampRadius > 0) keptPlanes(s).store(keepIndex(u, v), d);
         } else {
             static_assert(Phase == 3 && ClampRadius > 0, "phase 3: the clamp's row sums");

@@ -10,7 +10,8 @@
 //   ingest -> [outlier] -> geometry -> detail-temporal -> detail-clamp -> detail-variance
 //          -> detail-atrous0 .. detail-atrous{iterations-1} -> detail-stabilise (modulated)
 //   detail-temporal: reprojection of both histories (3x3 search where the bilinear taps fail),
-//   accumulation (scaled by the caller's confidence where given)
+//   accumulation (scaled by the caller's confidence where given; the raw sample where the pixel
+//   was far above its firefly limit in recent frames too: a light, DetailAccumulate)
 //   detail-stabilise: the result blended with the previous frame's, clamped to the current
 //   3x3 neighbourhood (NVIDIA NRD ReBLUR's temporal stabilisation), where nothing moved much
 //
@@ -36,6 +37,14 @@ namespace {
 // fall with motion (a reflection on a moving surface is not held back; docs/quality.md).
 constexpr float kStabiliseBlend = 0.65f, kStabiliseClampSigma = 1.5f, kStabiliseFalloff = 4.0f;
 
+// Where the firefly removal saw each pixel above its limit (DetailAccumulate's lights): zeros
+// where no pass writes it (the removal off), allocated zeroed.
+ResourceId declareAboveLimit(Pipeline& p, const std::string& signal) {
+    ResourceDecl decl = floatImage(signal.empty() ? "aboveLimit" : signal + "AboveLimit", 1);
+    decl.fillByte = 0;
+    return p.declare(decl);
+}
+
 // What both signals' passes use in turn (frame lifetime).
 struct SharedImages {
     ResourceId derivatives, variance, filterA, filterB, validity, lagScale, currentSums;
@@ -46,8 +55,8 @@ struct SharedImages {
 // output, stabilised and times the albedo, when toOutput; else returned). specular: the split
 // signal's specular part, with its own reprojection (DetailSpecularReproject).
 ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f,
-                         const SharedImages& shared, ResourceId in, bool specular, bool toOutput,
-                         const LearnedNetwork* mix) {
+                         const SharedImages& shared, ResourceId in, ResourceId above, bool specular,
+                         bool toOutput, const LearnedNetwork* mix) {
     const DetailSettings& d = settings.detail;
     const std::string prefix = specular ? "specular" : "";
     auto named = [&](const std::string& name) {
@@ -56,7 +65,7 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     const std::string passPrefix = specular ? "detail-specular-" : "detail-";
     ResourceId slow = p.declare(floatImage(named("slowHistory"), 3, Lifetime::History));
     ResourceId fast = p.declare(floatImage(named("fastHistory"), 3, Lifetime::History));
-    ResourceId moments = p.declare(floatImage(named("moments"), 2, Lifetime::History));
+    ResourceId moments = p.declare(floatImage(named("moments"), 3, Lifetime::History));
     ResourceId length = p.declare({.name = named("historyLength"),
                                    .lifetime = Lifetime::History,
                                    .hasDebugView = !specular,
@@ -75,11 +84,11 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
     }
 
     const HistoryTest test = historyTest(settings.history);
-    std::vector<ResourceId> temporalReads = with(
-        reprojectionReads(p, f),
-        {derivatives, previous(slow), previous(fast), previous(moments), previous(length), in});
+    std::vector<ResourceId> temporalReads =
+        with(reprojectionReads(p, f), {derivatives, previous(slow), previous(fast),
+                                       previous(moments), previous(length), in, f.noisy, above});
     if (specular) temporalReads.push_back(shared.lobe);
-    std::vector<ResourceId> temporalWrites{slow, fast, moments, length, validity};
+    std::vector<ResourceId> temporalWrites{slow, fast, moments, length, validity, in};
     if (toOutput) {
         temporalReads.push_back(previous(stable));
         temporalWrites.push_back(heldStable);
@@ -115,6 +124,8 @@ ResourceId declareSignal(Pipeline& p, const DenoiserSettings& settings, const Fr
                                                     float(d.fastHistory),
                                                     d.momentsAlpha};
                   reproject.previousStable = c.planes(previous(toOutput ? stable : slow));
+                  accumulate.raw = c.planes(f.noisy);
+                  accumulate.above = c.floats(above);
                   if (toOutput) accumulate.heldStable = c.planes(heldStable);
                   DetailTemporalStageStep step{reproject, accumulate};
                   if (specular) {
@@ -240,7 +251,8 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings, const M
                       c.device().run(step);
                   });
     }
-    ResourceId in = declareDespeckle(p, settings, f);
+    const ResourceId above = declareAboveLimit(p, "");
+    ResourceId in = declareDespeckle(p, settings, f, false, "", above);
 
     SharedImages shared;
     shared.derivatives = p.declare(floatImage("derivatives", 3));  // dz/dx, dz/dy, fwidth(n)
@@ -263,13 +275,15 @@ FrameImages declareDetail(Pipeline& p, const DenoiserSettings& settings, const M
               [f, derivatives](const PassContext& c) {
                   c.device().run(GeometryStep{{gbuffer(c, f), c.planeSet(derivatives)}});
               });
-    declareSignal(p, settings, f, shared, in, false, true, mix);
+    declareSignal(p, settings, f, shared, in, above, false, true, mix);
     if (!inputs.specular) return f;
 
     specularFrame.noisy = specularNoisy;
-    ResourceId specularIn = declareDespeckle(p, settings, specularFrame, false, "specular");
-    ResourceId filtered =
-        declareSignal(p, settings, specularFrame, shared, specularIn, true, false, nullptr);
+    const ResourceId specularAbove = declareAboveLimit(p, "specular");
+    ResourceId specularIn =
+        declareDespeckle(p, settings, specularFrame, false, "specular", specularAbove);
+    ResourceId filtered = declareSignal(p, settings, specularFrame, shared, specularIn,
+                                        specularAbove, true, false, nullptr);
     const ResourceId keys = specularFrame.filterKeys;
     p.addPass("add-specular", StepKind::AddToOutput, {filtered, keys, p.output()}, {p.output()}, 0,
               [filtered, keys](const PassContext& c) {

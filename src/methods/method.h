@@ -90,7 +90,7 @@ HistoryTest historyTest(const HistorySettings& settings);
 // over SVGF's clamp window in windowSums. signal: a suffix of its names (a second signal's).
 ResourceId declareDespeckle(Pipeline& pipeline, const DenoiserSettings& settings,
                             const FrameImages& images, bool clampSums = false,
-                            const std::string& signal = "");
+                            const std::string& signal = "", ResourceId above = {});
 // The spatial filter of `in` into `out`; modulateLast: its last A-Trous level writes the output
 // (times the albedo) instead. `scratch`: the A-Trous levels' second image.
 void declareSpatialFilter(Pipeline& pipeline, const DenoiserSettings& settings,

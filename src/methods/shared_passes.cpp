@@ -211,7 +211,7 @@ FrameImages declareIngest(Pipeline& p, const DenoiserSettings& settings) {
 }
 
 ResourceId declareDespeckle(Pipeline& p, const DenoiserSettings& settings, const FrameImages& f,
-                            bool clampSums, const std::string& signal) {
+                            bool clampSums, const std::string& signal, ResourceId above) {
     if (!settings.outlier.enabled) return f.noisy;
     const std::string suffix = signal.empty() ? "" : "-" + signal;
     ResourceId despeckled = p.declare(floatImage("despeckled" + suffix, 3));
@@ -219,12 +219,14 @@ ResourceId declareDespeckle(Pipeline& p, const DenoiserSettings& settings, const
     const float k = settings.outlier.k;
     p.addPass(
         "outlier" + suffix, StepKind::Despeckle, with(gbufferReads(f), {f.noisy}),
-        {despeckled, f.windowSums},
+        above.index >= 0 ? std::vector<ResourceId>{despeckled, f.windowSums, above}
+                         : std::vector<ResourceId>{despeckled, f.windowSums},
         clampSums ? std::max(windowReach(radius), kSvgfWindowRadius) : windowReach(radius),
-        [f, despeckled, radius, k, clampSums](const PassContext& c) {
+        [f, despeckled, radius, k, clampSums, above](const PassContext& c) {
             c.device().run(DespeckleStep{gbuffer(c, f), c.planes(f.noisy), c.planes(despeckled),
                                          c.planeSet(f.windowSums), radius, k,
-                                         clampSums ? c.planeSet(f.windowSums) : PlaneSet{}});
+                                         clampSums ? c.planeSet(f.windowSums) : PlaneSet{},
+                                         above.index >= 0 ? c.floats(above) : nullptr});
         });
     return despeckled;
 }
