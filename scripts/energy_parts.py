@@ -20,6 +20,7 @@ Needs the Python module (build/release/python on PYTHONPATH) and numpy. --cli BI
 that build's command instead (`rtdenoise denoise`, the settings as its flags): another build's
 figures, e.g. a commit before a change."""
 import argparse
+import contextlib
 import json
 import os
 import pathlib
@@ -49,6 +50,28 @@ def parse_config(text):
                 except ValueError:
                     values[key] = value  # a path (weights=FILE)
     return name, method or name, values
+
+
+def parse_configs(texts):
+    """--config texts into (name, method, settings) and each name's environment (@ENV=V;...)."""
+    configs, environments = [], {}
+    for text in texts:
+        spec, _, env = text.partition("@")
+        configs.append(parse_config(spec))
+        environments[configs[-1][0]] = dict(e.split("=", 1) for e in env.split(";") if e)
+    return configs, environments
+
+
+@contextlib.contextmanager
+def environment(variables):
+    """The process environment with `variables` set, restored after."""
+    saved = dict(os.environ)
+    os.environ.update(variables)
+    try:
+        yield
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
 
 
 def sequence_paths(folder):
@@ -148,11 +171,7 @@ def main():
     parser.add_argument("--json")
     parser.add_argument("--cli", help="denoise with this build's rtdenoise command")
     args = parser.parse_args()
-    configs, environments = [], {}
-    for text in args.config:
-        spec, _, env = text.partition("@")
-        configs.append(parse_config(spec))
-        environments[configs[-1][0]] = dict(e.split("=", 1) for e in env.split(";") if e)
+    configs, environments = parse_configs(args.config)
     configs = configs or [(m, m, {}) for m in ("jbf", "atrous", "temporal", "svgf", "detail")]
     results = {}
     print(f"{'sequence':<28} {'config':<22} {'energy':>7} {'tile5':>6} {'tile95':>6} "
@@ -165,11 +184,8 @@ def main():
         if len(refs) != len(frames):
             sys.exit(f"{folder}: {len(frames)} frames, {len(refs)} references")
         for name, method, settings in configs:
-            saved = dict(os.environ)
-            os.environ.update(environments.get(name, {}))
-            r = evaluate(frames, refs, method, settings, args.tile, args.cli, source)
-            os.environ.clear()
-            os.environ.update(saved)
+            with environment(environments.get(name, {})):
+                r = evaluate(frames, refs, method, settings, args.tile, args.cli, source)
             results.setdefault(str(folder), {})[name] = r
             print(f"{pathlib.Path(folder).name:<28} {name:<22} {r['energy']:7.3f} "
                   f"{r['tile_p5']:6.3f} {r['tile_p95']:6.3f} {r['rel_mse']:8.4f} "

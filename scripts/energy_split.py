@@ -16,13 +16,12 @@ it there is the method's loss; where the input itself misses it (16 frames at 1 
 256-spp reference), no denoiser can give it back. The last rows sum each class over the sequences
 (each sequence weighted alike: its shares)."""
 import argparse
-import os
 import pathlib
 
 import numpy as np
 
 import rtdenoise as rtd
-from energy_parts import edge_mask, parse_config, sequence_paths
+from energy_parts import edge_mask, environment, parse_configs, sequence_paths
 from relmse_outliers import distance_to, luminance
 
 CLASSES = ("light", "near", "edge", "rest")
@@ -43,11 +42,7 @@ def main():
     parser.add_argument("--light-at", type=float, default=20.0,
                         help="a light pixel: reference luminance over this times the frame's mean")
     args = parser.parse_args()
-    configs, environments = [], {}
-    for text in args.config or ["svgf", "detail"]:
-        spec, _, env = text.partition("@")
-        configs.append(parse_config(spec))
-        environments[configs[-1][0]] = dict(e.split("=", 1) for e in env.split(";") if e)
+    configs, environments = parse_configs(args.config or ["svgf", "detail"])
     names = ["reference", "input"] + [c[0] for c in configs]
     print(f"{'sequence':<24} {'class':<6} {'pixels':>7} " + " ".join(f"{n:>10}" for n in names))
     totals = {c: np.zeros(len(names) + 1) for c in CLASSES}
@@ -58,13 +53,10 @@ def main():
         refs = [rtd.read_exr(p)[..., :3] for p in ref_paths]
         outputs = []
         for name, method, settings in configs:
-            saved = dict(os.environ)
-            os.environ.update(environments.get(name, {}))
-            den = rtd.Denoiser(method, **settings)
-            outputs.append([luminance(den.denoise(**f.inputs())) for f in frames])
-            den.close()
-            os.environ.clear()
-            os.environ.update(saved)
+            with environment(environments.get(name, {})):
+                den = rtd.Denoiser(method, **settings)
+                outputs.append([luminance(den.denoise(**f.inputs())) for f in frames])
+                den.close()
         sums = np.zeros((len(CLASSES), len(names) + 1))  # + the pixel count
         for t, (f, r) in enumerate(zip(frames, refs)):
             cls = pixel_classes(r, np.asarray(f.ids), args.light_at)

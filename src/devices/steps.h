@@ -70,7 +70,7 @@ struct DespeckleStep {
     int radius;
     float k;
     PlaneSet clampSums = {};
-    float* above = nullptr;  // optional: 1 where a pixel is above its firefly limit (Outlier)
+    float* above = nullptr;  // optional out: aboveLimit's mark per pixel (Outlier)
 };
 
 struct JbfStep {

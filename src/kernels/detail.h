@@ -23,7 +23,7 @@ struct DetailHistorySample {
     Float3 slow, fast;
     float mean = 0.0f, variance = 0.0f, length = 0.0f;
     Float3 stable;        // the previous frame's stabilised output (DetailStabilise); 0 without one
-    float bright = 0.0f;  // how often the pixel was above its firefly limit (DetailAccumulate)
+    float bright = 0.0f;  // the share of frames it was far above its firefly limit (aboveLimit)
 };
 
 // The previous frame's histories, weighted over the taps (the moments' variance includes the
@@ -159,8 +159,8 @@ struct DetailAccumulate {
     // A light seen directly is far above its firefly limit frame after frame; a firefly seldom
     // hits a pixel twice running. The share of frames above (an average with kAboveWeight for
     // the current frame) reaching kLightShare (the last frame above, or two of the last three)
-    // makes the pixel a light: its raw value is accumulated. Lights of a pixel or two lost 10-15 %
-    // of their light as fireflies (docs/energy.md). The luminance moments stay the despeckled
+    // makes the pixel a light: its raw value is accumulated (lights a pixel or two wide were
+    // lost as fireflies: docs/energy.md). The luminance moments stay the despeckled
     // value's: a light's swing (a pixel it half covers) would widen its neighbours' filter.
     static constexpr float kAboveWeight = 0.5f, kLightShare = 0.4f;
 

@@ -27,11 +27,17 @@ RTD_HOST_DEVICE RTD_INLINE FireflyLimit fireflyLimit(float l, float count, float
     return {mean + k * std::sqrt(variance), others};
 }
 
+// Whether luminance l is over `factor` times its firefly limit, where the removal applies at all
+// (an object pixel with another object pixel in its window).
+RTD_HOST_DEVICE RTD_INLINE bool overLimit(float l, bool foreground, FireflyLimit f, float factor) {
+    return foreground & (f.others >= 0.5f) & (l > factor * f.limit) & (l > 0.0f);
+}
+
 // Colour c with its luminance clamped to its firefly limit, its hue kept. Background, a pixel
 // with no other object pixel around, and a light (`kept`: brightLikeItsObject) keep their value.
 RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, FireflyLimit f, bool kept) {
     const float l = luminance(c);
-    const bool clamp = foreground & (f.others >= 0.5f) & (l > f.limit) & (l > 0.0f) & !kept;
+    const bool clamp = overLimit(l, foreground, f, 1.0f) & !kept;
     return c * (clamp ? f.limit / l : 1.0f);
 }
 
@@ -40,10 +46,7 @@ RTD_HOST_DEVICE RTD_INLINE Float3 despeckle(Float3 c, bool foreground, FireflyLi
 // over its limit the frame before a firefly made that firefly a light (docs/energy.md).
 constexpr float kAboveLimitFactor = 2.0f;
 RTD_HOST_DEVICE RTD_INLINE float aboveLimit(Float3 c, bool foreground, FireflyLimit f) {
-    const float l = luminance(c);
-    const bool above =
-        foreground & (f.others >= 0.5f) & (l > kAboveLimitFactor * f.limit) & (l > 0.0f);
-    return above ? 1.0f : 0.0f;
+    return overLimit(luminance(c), foreground, f, kAboveLimitFactor) ? 1.0f : 0.0f;
 }
 
 // Whether the pixel at i, above its firefly limit, is bright like its object rather than a
@@ -80,7 +83,7 @@ struct Outlier {
     Planes3 in, out;
     int radius;  // <= MaxRadius
     float k;
-    float* above = nullptr;  // out, optional: 1 where the pixel is above its limit, else 0
+    float* above = nullptr;  // out, optional: aboveLimit's mark (1 or 0)
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int x, int y) const {
         const Layout& L = g.layout;

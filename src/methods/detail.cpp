@@ -37,12 +37,10 @@ namespace {
 // fall with motion (a reflection on a moving surface is not held back; docs/quality.md).
 constexpr float kStabiliseBlend = 0.65f, kStabiliseClampSigma = 1.5f, kStabiliseFalloff = 4.0f;
 
-// Where the firefly removal saw each pixel above its limit (DetailAccumulate's lights): zeros
-// where no pass writes it (the removal off), allocated zeroed.
+// Where the firefly removal saw each pixel far above its limit (DetailAccumulate's lights):
+// allocated zeroed (fillByte 0), and so all 0 where no pass writes it (the removal off).
 ResourceId declareAboveLimit(Pipeline& p, const std::string& signal) {
-    ResourceDecl decl = floatImage(signal.empty() ? "aboveLimit" : signal + "AboveLimit", 1);
-    decl.fillByte = 0;
-    return p.declare(decl);
+    return p.declare(floatImage(signal.empty() ? "aboveLimit" : signal + "AboveLimit", 1));
 }
 
 // What both signals' passes use in turn (frame lifetime).

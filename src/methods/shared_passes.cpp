@@ -217,10 +217,10 @@ ResourceId declareDespeckle(Pipeline& p, const DenoiserSettings& settings, const
     ResourceId despeckled = p.declare(floatImage("despeckled" + suffix, 3));
     const int radius = settings.outlier.radius;
     const float k = settings.outlier.k;
+    std::vector<ResourceId> writes{despeckled, f.windowSums};
+    if (above.index >= 0) writes.push_back(above);
     p.addPass(
-        "outlier" + suffix, StepKind::Despeckle, with(gbufferReads(f), {f.noisy}),
-        above.index >= 0 ? std::vector<ResourceId>{despeckled, f.windowSums, above}
-                         : std::vector<ResourceId>{despeckled, f.windowSums},
+        "outlier" + suffix, StepKind::Despeckle, with(gbufferReads(f), {f.noisy}), writes,
         clampSums ? std::max(windowReach(radius), kSvgfWindowRadius) : windowReach(radius),
         [f, despeckled, radius, k, clampSums, above](const PassContext& c) {
             c.device().run(DespeckleStep{gbuffer(c, f), c.planes(f.noisy), c.planes(despeckled),
