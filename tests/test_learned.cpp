@@ -227,5 +227,42 @@ TEST(Learned, OutputLiesBetweenTheUnfilteredAndTheMostFilteredCandidateWhateverT
     }
 }
 
+// The network may move the output from L5 towards L0 only by how far L0 lies beyond its own
+// noise (kLearnedL0NoiseMargin standard errors of its mean): a network that takes L0 alone gives
+// L5 where L0 is within its noise of it, L0 where L0 is exact, and half-way where L0 lies two
+// standard errors from L5 (docs/learned.md).
+TEST(Learned, TheUnfilteredCandidateMovesTheOutputOnlyByWhatLiesBeyondItsNoise) {
+    LearnedNetwork takesL0{};
+    takesL0.b3[0] = 60.0f;  // softmax weight of L0: 1 - 5e-26
+    const Float3 l5 = make3(0.4f, 0.5f, 0.6f), l0 = make3(0.8f, 1.0f, 1.2f);
+    const float gap = luminance(l0) - luminance(l5);
+    static_assert(kLearnedL0NoiseMargin == 1.0f, "the known answers below are for one margin");
+    // L0's standard error: twice the gap, none, half the gap; expected share of L0 - L5.
+    const float errors[] = {2.0f * gap, 0.0f, 0.5f * gap}, shares[] = {0.0f, 1.0f, 0.5f};
+    test::KnownAnswer k;
+    for (float e : errors) {
+        std::vector<float> in(29, 0.0f);
+        for (int j = 0; j < kLearnedCandidates; ++j) {
+            const Float3 v = j == 0 ? l0 : l5;
+            in[std::size_t(4 * j)] = v.x;
+            in[std::size_t(4 * j + 1)] = v.y;
+            in[std::size_t(4 * j + 2)] = v.z;
+        }
+        in[3] = e * e;
+        in[24] = 8.0f;
+        in[25] = in[26] = in[27] = 1.0f;
+        in[28] = 1.0f;
+        k.inputs.push_back(in);
+    }
+    const std::vector<float> out = mixOnCpu(k, takesL0, bestCpuInstructionSet());
+    for (std::size_t p = 0; p < k.inputs.size(); ++p) {
+        const Float3 expected = l5 + (l0 - l5) * shares[p];
+        const float want[] = {expected.x, expected.y, expected.z};
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(out[3 * p + std::size_t(c)], want[c], 1e-5f)
+                << "case " << p << ", channel " << c;
+    }
+}
+
 }  // namespace
 }  // namespace rtd

@@ -27,7 +27,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 from export import checksum_of, load_weights  # noqa: E402
 from features import CHANNELS, FOREGROUND, features, features_float64  # noqa: E402
-from model import FoldedMix  # noqa: E402
+from model import FoldedMix, clamp_to_range  # noqa: E402
 
 
 def _rtdenoise():
@@ -64,8 +64,7 @@ def _float64_reference(weights, raw):
     mix = torch.softmax(h @ w["w3"].T + w["b3"], dim=-1)
     cand = raw[..., :24].reshape(*raw.shape[:-1], 6, 4)[..., :3]
     mixed = (mix[..., None] * cand).sum(-2)
-    ends = cand[..., [0, 5], :]
-    mixed = torch.minimum(torch.maximum(mixed, ends.amin(dim=-2)), ends.amax(dim=-2))
+    mixed = clamp_to_range(mixed, cand, raw[..., 3])
     fg = raw[..., FOREGROUND:FOREGROUND + 1] > 0.5
     return f.numpy(), (raw[..., 25:28] * torch.where(fg, mixed, cand[..., 0, :])).numpy()
 
@@ -127,7 +126,8 @@ def known_answer(weights, out_path, width=8, height=6):
         "Each line: 29 inputs, 14 features, 3 outputs (R G B); 46 numbers, all %.9g of float32.",
         "Inputs: " + " ".join(CHANNELS) + ".",
         "Features f0..f13 in float32 as the spec writes them (computed for background pixels",
-        "too); outputs = albedo * clamp(sum_k w_k L_k.rgb, min(L0, L5), max(L0, L5)) (foreground)",
+        "too); outputs = albedo * clamp(sum_k w_k L_k.rgb, min(E, L5), max(E, L5)) (foreground;",
+        "E: L0 drawn towards L5 by its noise, model.range_end)",
         "or albedo * L0.rgb (background).",
         "Pixel 0 background; 1 black; 2 no variance; 3 L3 variance 1e-12; 4 L0 variance -1e-7;",
         "5 and 6 strong edges; 7 history 0.5; others: radiance 1e-3..1e3, history 0..40.",

@@ -7,7 +7,8 @@
     h1 = relu(W1 x + b1)  (16)
     h2 = relu(W2 h1 + b2) (16)
     w  = softmax(W3 h2 + b3) (6)           weights of the candidates L0..L5
-    out = albedo * clamp(sum_k w_k L_k.rgb, min(L0, L5), max(L0, L5))   foreground pixels
+    out = albedo * clamp(sum_k w_k L_k.rgb, min(E, L5), max(E, L5))   foreground pixels
+                                           (E: L0 drawn towards L5 by its noise, range_end)
     out = albedo * L0.rgb                  background pixels (foreground = 0)
 """
 
@@ -17,6 +18,29 @@ from torch import nn
 from features import ALBEDO, CANDIDATES, FEATURES, FOREGROUND, candidates, features
 
 HIDDEN = 16
+
+# How many standard errors of L0's mean the range's L0 end is drawn towards L5 (kernels/learned.h).
+L0_NOISE_MARGIN = 1.0
+
+
+def range_end(l0, l5, v0):
+    """The unfiltered end of the mix's range (kernels/learned.h learnedRangeEnd): L0 (..., 3)
+    drawn towards L5 by L0_NOISE_MARGIN standard errors of its mean (v0: its luminance
+    variance, (...)). Any float dtype."""
+    def lum(c):
+        return 0.2126 * c[..., 0] + 0.7152 * c[..., 1] + 0.0722 * c[..., 2]
+    gap = (lum(l0) - lum(l5)).abs()
+    noise = L0_NOISE_MARGIN * torch.sqrt(torch.clamp(v0, min=0.0))
+    beyond_noise = torch.clamp(gap - noise, min=0.0)
+    return l5 + (l0 - l5) * (beyond_noise / torch.clamp(gap, min=1e-20)).unsqueeze(-1)
+
+
+def clamp_to_range(mixed, cand, v0):
+    """mixed (..., 3) kept per channel between L5 and range_end (cand: (..., 6, 3))."""
+    end = range_end(cand[..., 0, :], cand[..., -1, :], v0)
+    low = torch.minimum(end, cand[..., -1, :])
+    high = torch.maximum(end, cand[..., -1, :])
+    return torch.minimum(torch.maximum(mixed, low), high)
 
 
 class LearnedMix(nn.Module):
@@ -56,9 +80,8 @@ class LearnedMix(nn.Module):
         w = self.mix_weights(features(raw))
         cand = candidates(raw)  # (..., 6, 3)
         mixed = (w.unsqueeze(-1) * cand).sum(dim=-2)
-        # Kept between the unfiltered L0 and the most filtered L5, per channel (kernels/learned.h).
-        ends = cand[..., [0, CANDIDATES - 1], :]
-        mixed = torch.minimum(torch.maximum(mixed, ends.amin(dim=-2)), ends.amax(dim=-2))
+        # Kept between L5 and L0 drawn towards it by its noise, per channel (kernels/learned.h).
+        mixed = clamp_to_range(mixed, cand, raw[..., 3])
         albedo = raw[..., ALBEDO]
         foreground = raw[..., FOREGROUND:FOREGROUND + 1] > 0.5
         out = albedo * torch.where(foreground, mixed, cand[..., 0, :])

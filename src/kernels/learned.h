@@ -99,6 +99,19 @@ RTD_HOST_DEVICE RTD_INLINE void learnedWeights(const LearnedNetwork& n,
     for (int o = 0; o < kLearnedCandidates; ++o) w[o] *= inverse;
 }
 
+// How many standard errors of L0's mean the range's L0 end is drawn towards L5 (learnedRangeEnd).
+constexpr float kLearnedL0NoiseMargin = 1.0f;
+
+// The unfiltered end of the mix's range: L0 drawn towards L5 by kLearnedL0NoiseMargin standard
+// errors of L0's mean (its luminance variance v0), so that L0 moves the output from L5 only by
+// what lies beyond its own noise. A history still holding a light that has moved on sits within
+// its noise of L5, and the network had trusted it (docs/learned.md). Between L0 and L5.
+RTD_HOST_DEVICE RTD_INLINE Float3 learnedRangeEnd(const Float3& l0, const Float3& l5, float v0) {
+    const float gap = absf(luminance(l0) - luminance(l5));
+    const float beyondNoise = maxf(gap - kLearnedL0NoiseMargin * std::sqrt(maxf(v0, 0.0f)), 0.0f);
+    return l5 + (l0 - l5) * (beyondNoise / maxf(gap, 1e-20f));
+}
+
 // The mix, demodulated, into `out` (detail's stabilisation multiplies the albedo back).
 // Background (a filter key below 0) passes the accumulated illumination through, as the
 // A-Trous iterations do.
@@ -124,11 +137,13 @@ struct LearnedMixKernel {
         Float3 mix = c[0] * w[0];
         RTD_UNROLL
         for (int k = 1; k < kLearnedCandidates; ++k) mix += c[k] * w[k];
-        // Kept between the unfiltered and the most filtered candidate, per channel (the box [L0,
-        // L0] grown to hold L5): beside a light or a highlight the middle levels blur its
-        // radiance into the pixel beyond both, where the loss saturates and the network does not
-        // learn to avoid them (docs/learned.md). Still a weighted average of the candidates.
-        mix = clampToBoxHolding(mix, c[0], c[0], c[kLearnedCandidates - 1]);
+        // Kept between the most filtered candidate and the unfiltered one drawn towards it
+        // (learnedRangeEnd), per channel (the box [e, e] grown to hold L5): beside a light or a
+        // highlight the middle levels blur its radiance into the pixel beyond both, and the
+        // network, which sees few such pixels, does not learn to avoid them (docs/learned.md).
+        // Still a weighted average of the candidates.
+        const Float3 end = learnedRangeEnd(c[0], c[kLearnedCandidates - 1], variance[0]);
+        mix = clampToBoxHolding(mix, end, end, c[kLearnedCandidates - 1]);
         const bool foreground = g.filterKey[i] >= 0;
         // Per component (a selected vector would stop the CPU vectorising the kernel).
         out.store(i, make3(foreground ? mix.x : c[0].x, foreground ? mix.y : c[0].y,

@@ -351,7 +351,7 @@ double ssim(const Image& resultDisplay, const Image& referenceDisplay, const Pix
         std::vector<double> moments(std::size_t(kBand + 2 * kSsimRadius) * rowStride);
         std::vector<double> vertical(rowStride);
         std::vector<double> a(width), b(width), m(masked ? width : 0);
-#pragma omp for schedule(dynamic) reduction(+ : sum0, sum1, sum2)
+#pragma omp for schedule(monotonic : dynamic) reduction(+ : sum0, sum1, sum2)
         for (int band = 0; band < bands; ++band) {
             const int y0 = band * kBand;
             const int y1 = std::min(height, y0 + kBand);

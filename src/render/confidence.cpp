@@ -84,7 +84,7 @@ Image historyConfidence(const Scene& previous, const Scene& current, const Frame
     // its luminance (A-SVGF normalises its filtered gradient by the filtered maximum likewise).
     Image confidence(width, height, 1, 1.0f);
     const int r = std::clamp(settings.filterRadius, 0, 16);
-#pragma omp parallel for schedule(dynamic)
+#pragma omp parallel for schedule(monotonic : dynamic)
     for (int sy = 0; sy < rows; ++sy) {
         for (int sx = 0; sx < columns; ++sx) {
             const Stratum& centre = strata[std::size_t(sy) * columns + sx];

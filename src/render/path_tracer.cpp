@@ -980,7 +980,7 @@ Image renderRadiance(const Scene& scene, const TraceSettings& settings, Image* s
     const bool split = specularOut != nullptr;
     if (split) *specularOut = Image(w, h, 3);
     const int spp = std::max(1, settings.samplesPerPixel);
-#pragma omp parallel for schedule(dynamic)
+#pragma omp parallel for schedule(monotonic : dynamic)
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(w) + std::uint64_t(x);
@@ -1031,7 +1031,7 @@ std::vector<GradientSample> traceGradientSamples(const Scene& previous, const Sc
         moved.push_back(from.m != to.m);
     }
     std::vector<GradientSample> out(pixels.size());
-#pragma omp parallel for schedule(dynamic, 64)
+#pragma omp parallel for schedule(monotonic : dynamic, 64)
     for (std::ptrdiff_t i = 0; i < std::ptrdiff_t(pixels.size()); ++i) {
         const PixelCoord p = pixels[std::size_t(i)];
         GradientSample& g = out[std::size_t(i)];
@@ -1098,7 +1098,7 @@ Frame renderGBuffer(const Scene& scene, int width, int height, bool split) {
         f.roughness = Image(width, height, 1);
         f.hitDistance = Image(width, height, 1);
     }
-#pragma omp parallel for schedule(dynamic)
+#pragma omp parallel for schedule(monotonic : dynamic)
     for (int y = 0; y < height; ++y) {
         for (int x = 0; x < width; ++x) {
             Ray ray{camera.position, camera.direction(float(x) + 0.5f, float(y) + 0.5f)};

@@ -169,7 +169,9 @@ void parallelRows(int width, int height, const Kernel& kernel, RowOf rowOf) {
 #pragma omp for schedule(static)
             for (int k = 0; k < height; ++k) runRow(local, 0, width, rowOf(k));
         } else {
-#pragma omp for schedule(dynamic, 4)
+            // monotonic: libomp 14 serves the default (nonmonotonic) dynamic schedule by work
+            // stealing, whose assertion aborted a run (docs/robustness.md); so every dynamic loop.
+#pragma omp for schedule(monotonic : dynamic, 4)
             for (int k = 0; k < height; ++k) runRow(local, 0, width, rowOf(k));
         }
     }
@@ -319,7 +321,7 @@ void parallelTiles(int width, int height, const Kernel& kernel) {
         flushDenormalsToZero();
         const Kernel local = kernel;  // a private copy, as in parallelRows
         typename Kernel::Shared shared;
-#pragma omp for schedule(dynamic, 4)
+#pragma omp for schedule(monotonic : dynamic, 4)
         for (int t = 0; t < tiles; ++t) {
             const int tileX = t % across * Kernel::kTileWidth,
                       tileY = t / across * Kernel::kTileHeight;
