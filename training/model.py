@@ -15,7 +15,7 @@
 import torch
 from torch import nn
 
-from features import ALBEDO, CANDIDATES, FEATURES, FOREGROUND, candidates, features
+from features import ALBEDO, CANDIDATES, FEATURES, FOREGROUND, candidates, features, lum
 
 HIDDEN = 16
 
@@ -27,9 +27,7 @@ def range_end(l0, l5, v0):
     """The unfiltered end of the mix's range (kernels/learned.h learnedRangeEnd): L0 (..., 3)
     drawn towards L5 by L0_NOISE_MARGIN standard errors of its mean (v0: its luminance
     variance, (...)). Any float dtype."""
-    def lum(c):
-        return 0.2126 * c[..., 0] + 0.7152 * c[..., 1] + 0.0722 * c[..., 2]
-    gap = (lum(l0) - lum(l5)).abs()
+    gap = (lum(*l0.unbind(-1)) - lum(*l5.unbind(-1))).abs()
     noise = L0_NOISE_MARGIN * torch.sqrt(torch.clamp(v0, min=0.0))
     beyond_noise = torch.clamp(gap - noise, min=0.0)
     return l5 + (l0 - l5) * (beyond_noise / torch.clamp(gap, min=1e-20)).unsqueeze(-1)
