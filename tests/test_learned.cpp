@@ -229,16 +229,18 @@ TEST(Learned, OutputLiesBetweenTheUnfilteredAndTheMostFilteredCandidateWhateverT
 
 // The network may move the output from L5 towards L0 only by how far L0 lies beyond its own
 // noise (kLearnedL0NoiseMargin standard errors of its mean): a network that takes L0 alone gives
-// L5 where L0 is within its noise of it, L0 where L0 is exact, and half-way where L0 lies two
-// standard errors from L5 (docs/learned.md).
+// L5 where L0 is within its noise of it, L0 where L0 is exact, and half-way where L0 lies twice
+// the margin's standard errors from L5 (docs/learned.md).
 TEST(Learned, TheUnfilteredCandidateMovesTheOutputOnlyByWhatLiesBeyondItsNoise) {
     LearnedNetwork takesL0{};
     takesL0.b3[0] = 60.0f;  // softmax weight of L0: 1 - 5e-26
     const Float3 l5 = make3(0.4f, 0.5f, 0.6f), l0 = make3(0.8f, 1.0f, 1.2f);
     const float gap = luminance(l0) - luminance(l5);
-    static_assert(kLearnedL0NoiseMargin == 1.0f, "the known answers below are for one margin");
-    // L0's standard error: twice the gap, none, half the gap; expected share of L0 - L5.
-    const float errors[] = {2.0f * gap, 0.0f, 0.5f * gap}, shares[] = {0.0f, 1.0f, 0.5f};
+    // L0's standard error, in margins: twice the gap, none, half the gap; the expected share of
+    // L0 - L5.
+    const float margin = kLearnedL0NoiseMargin;
+    const float errors[] = {2.0f * gap / margin, 0.0f, 0.5f * gap / margin},
+                shares[] = {0.0f, 1.0f, 0.5f};
     test::KnownAnswer k;
     for (float e : errors) {
         std::vector<float> in(29, 0.0f);

@@ -306,7 +306,7 @@ def synthetic_samples(count, seed=0, frames_per_sequence=8):
         sigma0 = 0.8 * lum_c / np.sqrt(np.maximum(history, 1.0))[:, None] + 1e-3
         for k in range(6):
             sigma = sigma0 * 0.55 ** k
-            bias = edge * (0.25 * k) * rng.standard_normal((count, 1))
+            bias = edge * (0.35 * k) * rng.standard_normal((count, 1))
             noisy = c * (1.0 + bias) + sigma * rng.standard_normal((count, 3))
             raw[:, 4 * k: 4 * k + 3] = np.maximum(noisy, 0.0)
             raw[:, 4 * k + 3] = (sigma[:, 0] ** 2) * rng.uniform(0.5, 1.5, count)

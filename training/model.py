@@ -20,7 +20,7 @@ from features import ALBEDO, CANDIDATES, FEATURES, FOREGROUND, candidates, featu
 HIDDEN = 16
 
 # How many standard errors of L0's mean the range's L0 end is drawn towards L5 (kernels/learned.h).
-L0_NOISE_MARGIN = 1.0
+L0_NOISE_MARGIN = 2.0
 
 
 def range_end(l0, l5, v0):

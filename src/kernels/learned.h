@@ -99,8 +99,9 @@ RTD_HOST_DEVICE RTD_INLINE void learnedWeights(const LearnedNetwork& n,
     for (int o = 0; o < kLearnedCandidates; ++o) w[o] *= inverse;
 }
 
-// How many standard errors of L0's mean the range's L0 end is drawn towards L5 (learnedRangeEnd).
-constexpr float kLearnedL0NoiseMargin = 1.0f;
+// How many standard errors of L0's mean the range's L0 end is drawn towards L5 (learnedRangeEnd;
+// chosen on held-out train sequences: docs/learned.md).
+constexpr float kLearnedL0NoiseMargin = 2.0f;
 
 // The unfiltered end of the mix's range: L0 drawn towards L5 by kLearnedL0NoiseMargin standard
 // errors of L0's mean (its luminance variance v0), so that L0 moves the output from L5 only by
