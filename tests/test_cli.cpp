@@ -666,7 +666,7 @@ TEST(Cli, ABadWeightsFileIsRefusedBeforeAnythingIsWritten) {
     test::TempFolder dir("cli-bad-weights");
     const fs::path in = dir.path() / "in", out = dir.path() / "out";
     writeSequence(in, 2);
-    std::ofstream(dir.path() / "junk.txt") << "rtdenoise-weights 1\nnetwork learned-mix 14 16\n";
+    std::ofstream(dir.path() / "junk.txt") << "rtdenoise-weights 2\nnetwork learned-mix 14 16\n";
     Result r = runCli(denoiseCommand(in, out) + " --method learned --weights " +
                       quoted(dir.path() / "junk.txt"));
     EXPECT_NE(r.exitCode, 0);

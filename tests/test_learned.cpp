@@ -86,6 +86,16 @@ TEST(LearnedWeights, BadFilesAreRefusedNamingTheProblem) {
     const std::size_t first = tiny.find("b1 ") + 3;
     tiny.replace(first, tiny.find(' ', first) - first, "1e-42");
     EXPECT_EQ(refusal(withChecksum(tiny)), "");
+    // A network trained for another range, and format 1, which did not say which range.
+    std::string range = body;
+    range.replace(range.find("l0-margin 2"), 11, "l0-margin 1");
+    EXPECT_NE(refusal(withChecksum(range)).find("line 3 is 'range l0-margin 1'"), std::string::npos)
+        << refusal(withChecksum(range));
+    std::string format1 = body;
+    format1.replace(0, 19, "rtdenoise-weights 1");
+    format1.erase(format1.find("range l0-margin 2\n"), 18);
+    EXPECT_NE(refusal(withChecksum(format1)).find("format 1"), std::string::npos)
+        << refusal(withChecksum(format1));
     EXPECT_NE(refusal("hello\n").find("first line"), std::string::npos);
     EXPECT_EQ(refusal(withChecksum(body)), "");  // the round trip
 }
@@ -116,7 +126,7 @@ TEST(LearnedWeights, ADenoiserRefusesABadFileBeforeAnyFrame) {
 // A network whose softmax puts all its weight on one candidate, as a weights file: every weight
 // 0, the last layer's bias 80 for that candidate.
 std::string pickingWeights(int candidate) {
-    std::string body = "rtdenoise-weights 1\nnetwork learned-mix 14 16 16 6\ntrained test\n";
+    std::string body = "rtdenoise-weights 2\nnetwork learned-mix 14 16 16 6\nrange l0-margin 2\ntrained test\n";
     const auto block = [&](const char* name, int count, int hot) {
         body += name;
         for (int i = 0; i < count; ++i) body += i == hot ? " 80" : " 0";

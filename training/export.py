@@ -7,7 +7,8 @@
                                             counts, checksum)
     python3 training/export.py WEIGHTS      checks a file and prints its summary
 
-The file: 'rtdenoise-weights 1', 'network learned-mix 14 16 16 6', 'trained <text>', the blocks
+The file: 'rtdenoise-weights 2', 'network learned-mix 14 16 16 6', 'range l0-margin 2' (the
+model's L0_NOISE_MARGIN: the range the network was trained for), 'trained <text>', the blocks
 w1 b1 w2 b2 w3 b3 ('%.9g' floats, whitespace separated; a block may span lines: here one matrix
 row per line), then 'fnv1a32 <8 lowercase hex>': FNV-1a 32-bit of every byte before that line.
 """
@@ -18,8 +19,11 @@ import sys
 
 import numpy as np
 
-MAGIC = "rtdenoise-weights 1"
+from model import L0_NOISE_MARGIN
+
+MAGIC = "rtdenoise-weights 2"
 NETWORK = "network learned-mix 14 16 16 6"
+RANGE = f"range l0-margin {L0_NOISE_MARGIN:g}"
 SHAPES = {"w1": (16, 14), "b1": (16,), "w2": (16, 16), "b2": (16,), "w3": (6, 16), "b3": (6,)}
 BLOCKS = list(SHAPES)
 
@@ -42,7 +46,7 @@ def _format(value) -> str:
 
 def weights_text(arrays, trained: str) -> str:
     trained = " ".join(str(trained).split())  # one line
-    lines = [MAGIC, NETWORK, f"trained {trained or '(not described)'}"]
+    lines = [MAGIC, NETWORK, RANGE, f"trained {trained or '(not described)'}"]
     for name, shape in SHAPES.items():
         a = np.asarray(arrays[name], dtype=np.float32)
         if a.shape != shape:
@@ -86,15 +90,21 @@ def load_weights(path):
                            f"digits>' at the end of the file: {last[:40]!r}")
     expected, actual = int(m.group(1), 16), fnv1a32(body.encode("utf-8"))
     lines = body.split("\n")[:-1]
-    if len(lines) < 3 or lines[0] != MAGIC:
+    if lines and lines[0] == "rtdenoise-weights 1":
+        raise WeightsError(f"{where}: format 1, which does not record the range its network was "
+                           f"trained for; expected {MAGIC!r} (retrain it: training/README.md)")
+    if len(lines) < 4 or lines[0] != MAGIC:
         first = lines[0][:40] if lines else ""
         raise WeightsError(f"{where}: header {first!r}, expected {MAGIC!r}")
     if lines[1] != NETWORK:
         raise WeightsError(f"{where}: network {lines[1][:60]!r}, expected {NETWORK!r}")
-    if not lines[2].startswith("trained "):
-        raise WeightsError(f"{where}: line 3 is not the 'trained' line: {lines[2][:40]!r}")
+    if lines[2] != RANGE:
+        raise WeightsError(f"{where}: range {lines[2][:60]!r}, expected {RANGE!r} (a network "
+                           f"trained for another range: retrain it)")
+    if not lines[3].startswith("trained "):
+        raise WeightsError(f"{where}: line 4 is not the 'trained' line: {lines[3][:40]!r}")
     values, order, current = {}, [], None
-    for number, line in enumerate(lines[3:], start=4):
+    for number, line in enumerate(lines[4:], start=5):
         words = line.split()
         if words and words[0] in SHAPES:
             current = words[0]
@@ -113,7 +123,7 @@ def load_weights(path):
                                    f"number") from None
     if order != BLOCKS:
         raise WeightsError(f"{where}: blocks {' '.join(order)}, expected {' '.join(BLOCKS)}")
-    out = {"trained": lines[2][len("trained "):]}
+    out = {"trained": lines[3][len("trained "):]}
     for name, shape in SHAPES.items():
         count = int(np.prod(shape))
         if len(values[name]) != count:

@@ -16,7 +16,10 @@
 namespace rtd {
 namespace {
 
-constexpr std::string_view kMagic = "rtdenoise-weights 1";
+constexpr std::string_view kMagic = "rtdenoise-weights 2";
+// Format 1 did not record the margin of the range its network was trained for (margin 1 until
+// 2026-12-07): such a network would run silently on another range.
+constexpr std::string_view kFormat1 = "rtdenoise-weights 1";
 constexpr std::string_view kChecksumKey = "fnv1a32 ";
 
 [[noreturn]] void refuse(const std::string& source, const std::string& problem) {
@@ -62,6 +65,13 @@ std::uint32_t learnedWeightsChecksum(std::string_view body) {
 }
 
 LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& source) {
+    if (text.substr(0, kFormat1.size()) == kFormat1 &&
+        (text.size() == kFormat1.size() || text[kFormat1.size()] == '\n' ||
+         text[kFormat1.size()] == '\r'))
+        refuse(source, fmt::format("it is format 1, which does not record the range its network "
+                                   "was trained for; this build reads '{}' (retrain it: "
+                                   "training/README.md)",
+                                   kMagic));
     if (text.substr(0, kMagic.size()) != kMagic)
         refuse(source, fmt::format("the first line is not '{}'", kMagic));
     // The checksum line covers every byte before it: a truncated or edited file fails here.
@@ -92,9 +102,19 @@ LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& sou
                                            kLearnedHidden, kLearnedHidden, kLearnedCandidates);
     if (shape != wanted)
         refuse(source, fmt::format("line 2 is '{}'; this build reads '{}'", shape, wanted));
+    // Line 3: the range the network was trained for (kernels/learned.h learnedRangeEnd).
     const std::size_t thirdEnd = body.find('\n', secondEnd + 1);
-    if (thirdEnd == std::string_view::npos || body.substr(secondEnd + 1, 8) != "trained ")
-        refuse(source, "line 3 is not 'trained <how>'");
+    const std::string_view range = thirdEnd == std::string_view::npos
+                                       ? std::string_view()
+                                       : body.substr(secondEnd + 1, thirdEnd - secondEnd - 1);
+    const std::string wantedRange = fmt::format("range l0-margin {:g}", kLearnedL0NoiseMargin);
+    if (range != wantedRange)
+        refuse(source, fmt::format("line 3 is '{}'; this build's range is '{}' (a network "
+                                   "trained for another range: retrain it)",
+                                   range, wantedRange));
+    const std::size_t fourthEnd = body.find('\n', thirdEnd + 1);
+    if (fourthEnd == std::string_view::npos || body.substr(thirdEnd + 1, 8) != "trained ")
+        refuse(source, "line 4 is not 'trained <how>'");
 
     LearnedNetwork n{};
     struct Block {
@@ -107,7 +127,7 @@ LearnedNetwork parseLearnedWeights(std::string_view text, const std::string& sou
         {"w2", &n.w2[0][0], kLearnedHidden * kLearnedHidden},     {"b2", n.b2, kLearnedHidden},
         {"w3", &n.w3[0][0], kLearnedCandidates * kLearnedHidden}, {"b3", n.b3, kLearnedCandidates},
     };
-    const std::vector<Word> all = words(body.substr(thirdEnd + 1));
+    const std::vector<Word> all = words(body.substr(fourthEnd + 1));
     std::size_t w = 0;
     for (const Block& b : blocks) {
         if (w >= all.size() || all[w].text != b.name)

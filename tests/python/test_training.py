@@ -96,10 +96,15 @@ def test_the_weights_file_round_trips_and_refuses_damage(trained, tmp_path):
     edited.write_bytes(text[:at] + digit + text[at + 1:])
     with pytest.raises(export.WeightsError, match="checksum"):
         export.load_weights(edited)
-    for old, new in ((b"rtdenoise-weights 1", b"rtdenoise-weights 2"), (b" 16 6\n", b" 16 7\n")):
+    for old, new, problem in ((b"rtdenoise-weights 2", b"rtdenoise-weights 3", "header"),
+                              (b" 16 6\n", b" 16 7\n", "network"),
+                              (b"l0-margin 2\n", b"l0-margin 1\n", "range"),
+                              (b"rtdenoise-weights 2", b"rtdenoise-weights 1", "format 1")):
         bad = tmp_path / "header.txt"
-        bad.write_bytes(text.replace(old, new, 1))
-        with pytest.raises(export.WeightsError):
+        changed = text.replace(old, new, 1)
+        body = changed[: changed.rindex(b"\nfnv1a32 ") + 1]
+        bad.write_bytes(body + b"fnv1a32 %08x\n" % export.fnv1a32(body))
+        with pytest.raises(export.WeightsError, match=problem):
             export.load_weights(bad)
 
 
