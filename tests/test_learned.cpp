@@ -126,7 +126,8 @@ TEST(LearnedWeights, ADenoiserRefusesABadFileBeforeAnyFrame) {
 // A network whose softmax puts all its weight on one candidate, as a weights file: every weight
 // 0, the last layer's bias 80 for that candidate.
 std::string pickingWeights(int candidate) {
-    std::string body = "rtdenoise-weights 2\nnetwork learned-mix 14 16 16 6\nrange l0-margin 2\ntrained test\n";
+    std::string body =
+        "rtdenoise-weights 2\nnetwork learned-mix 14 16 16 6\nrange l0-margin 2\ntrained test\n";
     const auto block = [&](const char* name, int count, int hot) {
         body += name;
         for (int i = 0; i < count; ++i) body += i == hot ? " 80" : " 0";
