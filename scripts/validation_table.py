@@ -39,6 +39,7 @@ from energy_parts import edge_mask, tile_sums
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 BIN = pathlib.Path(os.environ.get("RTDENOISE", ROOT / "build/release/rtdenoise"))
+EXTRA_FLAGS = []  # --flags: given to every method but the input
 BUILTIN = ["moving-objects", "camera-pan", "thin-geometry", "switching-light", "reflections"]
 
 
@@ -65,6 +66,8 @@ def score(sequence, reference, method, work):
         args = ["--method", "jbf", "--radius", "0", "--no-outlier", "--no-albedo"]
         if has_no_energy():
             args.append("--no-energy")  # (builds before 2026-12-05 have no such option)
+    if method != "input":
+        args += EXTRA_FLAGS
     run(BIN, "denoise", sequence, "-o", out, "-q", *args)
     report = out.with_suffix(".json")
     run(BIN, "compare", out, reference, "--json", report, "-q")
@@ -147,9 +150,13 @@ def main():
     parser.add_argument("--methods", default="input,svgf,detail")
     parser.add_argument("--sets", default="validation,train,cycles,builtin",
                         help="which sets to score (comma-separated)")
+    parser.add_argument("--flags", default="",
+                        help="extra `rtdenoise denoise` flags for every method but the input, "
+                        "e.g. --flags=--energy-frame-share=0 (a setting's before and after)")
     parser.add_argument("--train-limit", type=int, default=0,
                         help="score only the first N train sequences (0: all)")
     options = parser.parse_args()
+    EXTRA_FLAGS.extend(options.flags.split())
     methods = options.methods.split(",")
     print("| set | method | sequences | relMSE | PSNR (dB) | SSIM | temporal error | "
           "energy ratio (min-max) | tiles 5-95 % | matches spp |")

@@ -35,6 +35,9 @@ void validate(const DenoiserSettings& s) {
     require(s.outlier.radius >= 1 && s.outlier.radius <= 15, "outlier-radius must be in [1, 15]");
     require(positive(s.outlier.k), "outlier-k must be > 0");
     require(std::isfinite(s.energy.cap) && s.energy.cap >= 1.0f, "energy-cap must be >= 1");
+    require(std::isfinite(s.energy.frameShare) && s.energy.frameShare >= 0.0f &&
+                s.energy.frameShare <= 1.0f,
+            "energy-frame-share must be in [0, 1]");
     require(std::isfinite(s.temporal.alpha) && s.temporal.alpha >= 0.0f && s.temporal.alpha <= 1.0f,
             "alpha must be in [0, 1]");
     require(positive(s.temporal.clampK), "clamp-k must be > 0");

@@ -184,6 +184,75 @@ TEST(Energy, AFireflyThatMovesIsNeverTakenForALight) {
     }
 }
 
+// The light above the tiles' cap comes back over the frame, a sample at most frameShare of it. A
+// lone pixel at 4000x a noise-free wall, far above its tiles' cap, in the first frame: the pixels
+// beyond its tiles' reach (the gain's tent spans 3x3 tiles of 16) are lifted by the frame's gain
+// alone, which that one sample takes to its bound, 1 + frameShare (less the little its own
+// tiles' gain already gave back); with frameShare 0 they are not lifted.
+TEST(Energy, ALoneSampleLiftsTheFrameByAtMostItsShare) {
+    SceneDescription d;
+    d.width = d.height = 96;
+    d.colour = [](int x, int y) {
+        const float v = x == 8 && y == 8 ? 2000.0f : 0.5f;
+        return std::array<float, 3>{v, v, v};
+    };
+    const Frame frame = makeFrame(d);
+    for (Method method : {Method::Jbf, Method::Svgf, Method::Detail}) {
+        for (float share : {0.005f, 0.02f, 0.0f}) {
+            DenoiserSettings with = test::cpuSettings(method), without = with;
+            with.energy.frameShare = share;
+            without.energy.keep = false;
+            const Image a = Denoiser(with).processFrame(frame);
+            const Image b = Denoiser(without).processFrame(frame);
+            double least = 1e9, most = 0.0;
+            for (int y = 48; y < 96; ++y)
+                for (int x = 48; x < 96; ++x) {
+                    const double ratio = double(a.at(x, y, 1)) / double(b.at(x, y, 1));
+                    least = std::min(least, ratio);
+                    most = std::max(most, ratio);
+                }
+            EXPECT_LE(most, 1.0 + share + 1e-5) << toString(method) << " share " << share;
+            EXPECT_GE(least, 1.0 + 0.9 * share - 1e-5) << toString(method) << " share " << share;
+        }
+    }
+}
+
+// Light in rare samples far above the tiles' cap (a 0.5 wall, and one pixel in 1000 at 1000,
+// half of the light): the frame's gain gives back part of what the cap cut, and never more
+// than the input holds. Frames 8-23 of every temporal method.
+TEST(Energy, TheTailTheTilesCutComesBackOverTheFrame) {
+    SceneDescription d;
+    d.width = d.height = 64;
+    const auto tail = [&](unsigned seed) {
+        Frame f = makeFrame(d);
+        std::mt19937 rng(seed);
+        std::uniform_int_distribution<int> draw(0, 999);
+        for (int y = 0; y < d.height; ++y)
+            for (int x = 0; x < d.width; ++x) {
+                const float v = draw(rng) == 0 ? 1000.0f : 0.5f;
+                for (int c = 0; c < 3; ++c) f.beauty.at(x, y, c) = v;
+            }
+        return f;
+    };
+    for (Method method : {Method::Temporal, Method::Svgf, Method::Detail}) {
+        double kept[2] = {0.0, 0.0}, input = 0.0;
+        for (int k = 0; k < 2; ++k) {
+            DenoiserSettings s = test::cpuSettings(method);
+            s.energy.frameShare = k == 0 ? 0.0f : 0.005f;
+            Denoiser denoiser(s);
+            for (unsigned frame = 0; frame < 24; ++frame) {
+                const Frame f = tail(frame + 1);
+                const Image out = denoiser.processFrame(f);
+                if (frame < 8) continue;
+                kept[k] += test::meanValue(out) / 16.0;
+                if (k == 0) input += test::meanValue(f.beauty) / 16.0;
+            }
+        }
+        EXPECT_GT(kept[1], kept[0] + 0.05) << toString(method);
+        EXPECT_LT(kept[1], 1.02 * input) << toString(method);
+    }
+}
+
 // A noise-free frame comes out as the method gives it: the gain is 1 where nothing was lost.
 TEST(Energy, NothingLostNothingChanged) {
     SceneDescription d;

@@ -683,6 +683,10 @@ void addDenoiserOptions(CLI::App& c, DenoiserSettings& s) {
     c.add_option("--energy-cap", s.energy.cap,
                  "[>=1] input samples above cap x the local mean count as that much")
         ->capture_default_str();
+    c.add_option("--energy-frame-share", s.energy.frameShare,
+                 "[0, 1] the light above that cap is given back over the whole frame, one "
+                 "sample lifting it by at most this share (0: not given back)")
+        ->capture_default_str();
     c.add_option("--weights", s.learned.weights,
                  "The learned method's weights file (training/train.py writes one; default: the "
                  "built-in weights)");

@@ -66,6 +66,9 @@ struct EnergySettings {
     float cap = 128.0f;  // [>=1] input samples above cap x the local mean count as that
                          // much (a quarter of it in a first frame): a lone firefly cannot
                          // brighten its tiles much
+    float frameShare = 0.005f;  // [0, 1] the light over the tiles' cap is given back over the
+                                // whole frame, each sample lifting it by at most this share
+                                // (0: not given back)
 };
 
 // Which previous-frame pixels may serve as history (temporal and svgf methods).

@@ -202,6 +202,7 @@ const SettingEntry kSettings[] = {
     RTD_SETTING("outlier-k", Float, outlier.k),
     RTD_SETTING("energy", Bool, energy.keep),
     RTD_SETTING("energy-cap", Float, energy.cap),
+    RTD_SETTING("energy-frame-share", Float, energy.frameShare),
     RTD_SETTING("weights", String, learned.weights),
 };
 #undef RTD_SETTING

@@ -173,12 +173,15 @@ struct EnergyInputStep {
     EnergyInputKernel input;
 };
 
-// The energy restoration of the output (kernels/energy.h): three kernels over the tile grid
-// (grid.across x grid.down items), then one over the pixels.
+// The energy restoration of the output (kernels/energy.h): four kernels over the tile grid
+// (grid.across x grid.down items) and two over the frame (one item), then one over the pixels.
 struct EnergyStep {
     EnergyOutputSumsKernel sums;
     EnergyAccumulateKernel accumulate;
+    EnergyFrameCapKernel frameCap;
+    EnergyTailKernel tail;
     EnergyGainKernel gain;
+    EnergyFrameGainKernel frameGain;
     EnergyApplyKernel apply;
 };
 

@@ -9,10 +9,15 @@
 // that one firefly cannot brighten its tiles much. The scale is smooth across the image:
 // structure, edges and noise are the method's.
 // Pixels brighter than the cap (lights seen directly) are neither counted nor scaled.
+// What the tiles' cap cuts (the tail of rare bright samples: much of indirect light) is given
+// back over the whole frame: the frame's gain, 1 + the averaged cut light over the averaged
+// restored output, each sample's cut part bounded so that it lifts the frame by at most
+// `frameShare` (EnergySettings::frameShare).
 //
-// One kernel reads the input after the ingest; three run over the tile grid (one item per tile)
-// and one over the pixels at the end:
-//   EnergyInput ... EnergyOutputSums -> EnergyAccumulate -> EnergyGain -> EnergyApply
+// One kernel reads the input after the ingest; four run over the tile grid (one item per tile),
+// two over the frame (one item) and one over the pixels at the end:
+//   EnergyInput ... EnergyOutputSums -> EnergyAccumulate -> EnergyFrameCap -> EnergyTail
+//                   -> EnergyGain -> EnergyFrameGain -> EnergyApply
 // Tile data: images of one value per tile (ResourceDecl::tile), a plane per array.
 #pragma once
 
@@ -26,11 +31,16 @@ inline constexpr int kEnergyTile = 16;  // pixels per tile side
 // The tile grid of a width x height image and where each of its arrays lies.
 struct EnergyGrid {
     int across = 0, down = 0;
-    // Frame arrays (EnergyOutputSums, EnergyAccumulate, EnergyGain): 5 x tiles floats.
+    // Frame arrays (EnergyOutputSums, EnergyAccumulate, EnergyTail, EnergyGain): 7 x tiles floats.
     float* frame = nullptr;
     // History (EnergyAccumulate): 3 x tiles floats, this frame's and last frame's.
     float* history = nullptr;
     const float* previousHistory = nullptr;
+    // The frame's values (EnergyFrameCap, EnergyFrameGain): the cut part's bound, the gain.
+    float* whole = nullptr;
+    // The frame's history: averaged cut light, averaged restored output, frames averaged.
+    float* wholeHistory = nullptr;
+    const float* previousWholeHistory = nullptr;
 
     RTD_HOST_DEVICE RTD_INLINE int tiles() const { return across * down; }
     RTD_HOST_DEVICE RTD_INLINE int tile(int tx, int ty) const { return ty * across + tx; }
@@ -40,6 +50,11 @@ struct EnergyGrid {
     RTD_HOST_DEVICE RTD_INLINE float& gain(int t) const { return frame[2 * tiles() + t]; }
     RTD_HOST_DEVICE RTD_INLINE float& threshold(int t) const { return frame[3 * tiles() + t]; }
     RTD_HOST_DEVICE RTD_INLINE float& inputSum(int t) const { return frame[4 * tiles() + t]; }
+    // this frame's output sum over the counted pixels; the light the tile's cap cut there
+    RTD_HOST_DEVICE RTD_INLINE float& countedOutput(int t) const {
+        return frame[5 * tiles() + t];
+    }
+    RTD_HOST_DEVICE RTD_INLINE float& tail(int t) const { return frame[6 * tiles() + t]; }
     // history: averaged input sum, averaged output sum, frames averaged
     RTD_HOST_DEVICE RTD_INLINE float& input(int t) const { return history[t]; }
     RTD_HOST_DEVICE RTD_INLINE float& output(int t) const { return history[tiles() + t]; }
@@ -163,6 +178,54 @@ struct EnergyAccumulateKernel {
             frames > 1.0f ? grid.previousOutput(t) + a * (output - grid.previousOutput(t)) : output;
         grid.frames(t) = frames;
         grid.threshold(t) = cap;
+        grid.countedOutput(t) = output;
+    }
+};
+
+// One item: the bound of a sample's cut part, frameShare x the frame's counted output x the
+// frames averaged (the average's weight of one frame is their reciprocal), so that one sample
+// lifts the frame's gain by at most frameShare however long the average.
+struct EnergyFrameCapKernel {
+    EnergyGrid grid;
+    int temporal = 0;  // 1: average over frames (EnergyAccumulate's)
+    int hasHistory = 0;
+    float maxFrames = 16.0f;
+    float frameShare = 0.0f;  // EnergySettings::frameShare
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int, int) const {
+        float output = 0.0f;
+        for (int t = 0; t < grid.tiles(); ++t) output += grid.countedOutput(t);
+        const float frames =
+            temporal && hasHistory ? minf(grid.previousWholeHistory[2] + 1.0f, maxFrames) : 1.0f;
+        grid.whole[0] = frameShare * output * frames;
+        grid.wholeHistory[2] = frames;
+    }
+};
+
+// Per tile: the light its cap cut from the counted pixels' input, each sample's part bounded by
+// EnergyFrameCap's.
+struct EnergyTailKernel {
+    Layout layout;
+    const std::int32_t* filterKey;
+    const float* rgbOut;
+    const float* inputLuminance;  // EnergyInputKernel's
+    EnergyGrid grid;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int tx, int ty) const {
+        const int t = grid.tile(tx, ty);
+        const float cap = grid.threshold(t), bound = grid.whole[0];
+        float tail = 0.0f;
+        const int x1 = mini(tx * kEnergyTile + kEnergyTile, layout.width);
+        const int y1 = mini(ty * kEnergyTile + kEnergyTile, layout.height);
+        for (int y = ty * kEnergyTile; y < y1; ++y)
+            for (int x = tx * kEnergyTile; x < x1; ++x) {
+                const PixelIndex i = layout.index(x, y);
+                const float out =
+                    maxf(luminance(loadInterleaved(rgbOut, layout.width, x, y)), 0.0f);
+                const bool counted = filterKey[i] >= 0 && out <= cap;
+                tail += counted ? minf(maxf(inputLuminance[i] - cap, 0.0f), bound) : 0.0f;
+            }
+        grid.tail(t) = tail;
     }
 };
 
@@ -189,8 +252,33 @@ struct EnergyGainKernel {
     }
 };
 
-// Per pixel: the output times the gain interpolated between the tile centres (foreground pixels
-// under their tile's cap).
+// One item: the frame's gain, 1 + the cut light over the output the tiles' gains give, both
+// averaged over EnergyFrameCap's frames, within [1, kMax].
+struct EnergyFrameGainKernel {
+    static constexpr float kMax = 1.25f;
+    EnergyGrid grid;
+
+    RTD_HOST_DEVICE RTD_INLINE void operator()(int, int) const {
+        float tail = 0.0f, restored = 0.0f;
+        for (int t = 0; t < grid.tiles(); ++t) {
+            tail += grid.tail(t);
+            restored += grid.gain(t) * grid.countedOutput(t);
+        }
+        const float frames = grid.wholeHistory[2], a = 1.0f / frames;
+        const float* before = grid.previousWholeHistory;
+        const float averagedTail = frames > 1.0f ? before[0] + a * (tail - before[0]) : tail;
+        const float averagedOutput =
+            frames > 1.0f ? before[1] + a * (restored - before[1]) : restored;
+        grid.wholeHistory[0] = averagedTail;
+        grid.wholeHistory[1] = averagedOutput;
+        grid.whole[1] =
+            averagedOutput > 1e-20f ? clampf(1.0f + averagedTail / averagedOutput, 1.0f, kMax)
+                                    : 1.0f;
+    }
+};
+
+// Per pixel: the output times the gain interpolated between the tile centres and the frame's gain
+// (foreground pixels under their tile's cap).
 struct EnergyApplyKernel {
     Layout layout;
     const std::int32_t* filterKey;
@@ -209,7 +297,7 @@ struct EnergyApplyKernel {
                           wx * (grid.gain(grid.tile(x1, y0)) - grid.gain(grid.tile(x0, y0)));
         const float bottom = grid.gain(grid.tile(x0, y1)) +
                              wx * (grid.gain(grid.tile(x1, y1)) - grid.gain(grid.tile(x0, y1)));
-        const float gain = top + wy * (bottom - top);
+        const float gain = (top + wy * (bottom - top)) * grid.whole[1];
         const PixelIndex s = PixelIndex(y) * layout.width + x;
         const Float3 c = {rgbOut[3 * s], rgbOut[3 * s + 1], rgbOut[3 * s + 2]};
         const bool scaled =

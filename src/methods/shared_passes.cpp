@@ -51,29 +51,50 @@ void declareEnergy(Pipeline& p, const DenoiserSettings& settings, const FrameIma
     // The tiles' average spans up to 4 frames: longer ones lag behind a method whose loss falls
     // as its history grows (chosen on the train set, docs/energy.md).
     constexpr float kEnergyFrames = 4.0f;
+    // The frame's average spans up to 16 frames: the cut light is rare bright samples (the train
+    // sequences are 16 frames long).
+    constexpr float kEnergyFrameFrames = 16.0f;
+    // One value per plane for the whole frame: a tile larger than any image.
+    constexpr int kWholeFrame = 1 << 30;
     ResourceId tiles =
-        p.declare({.name = "energyTiles", .planes = 5, .padded = false, .tile = kEnergyTile});
+        p.declare({.name = "energyTiles", .planes = 7, .padded = false, .tile = kEnergyTile});
     ResourceId history = p.declare({.name = "energyHistory",
                                     .planes = 3,
                                     .lifetime = Lifetime::History,
                                     .padded = false,
                                     .tile = kEnergyTile});
+    ResourceId whole =
+        p.declare({.name = "energyFrame", .planes = 2, .padded = false, .tile = kWholeFrame});
+    ResourceId wholeHistory = p.declare({.name = "energyFrameHistory",
+                                         .planes = 3,
+                                         .lifetime = Lifetime::History,
+                                         .padded = false,
+                                         .tile = kWholeFrame});
     const int temporal = usesHistory(settings.method) ? 1 : 0;
-    const float cap = settings.energy.cap;
+    const float cap = settings.energy.cap, frameShare = settings.energy.frameShare;
     p.addPass(
         "energy", StepKind::Energy,
-        {p.frame(), f.energyInput, f.filterKeys, p.output(), previous(history)},
-        {tiles, history, p.output()}, 0, [=](const PassContext& c) {
+        {p.frame(), f.energyInput, f.filterKeys, p.output(), previous(history),
+         previous(wholeHistory)},
+        {tiles, history, whole, wholeHistory, p.output()}, 0, [=](const PassContext& c) {
             const Layout& L = c.layout();
             EnergyGrid grid{energyTilesAcross(L.width), energyTilesAcross(L.height),
-                            c.floats(tiles), c.floats(history), c.floats(previous(history))};
+                            c.floats(tiles),        c.floats(history),
+                            c.floats(previous(history)), c.floats(whole),
+                            c.floats(wholeHistory), c.floats(previous(wholeHistory))};
             const std::int32_t* keys = c.ints(f.filterKeys);
             float* out = c.output();
-            c.device().run(EnergyStep{{L, keys, out, c.floats(f.energyInput), grid},
-                                      {L, keys, out, c.floats(f.energyInput), c.frame().confidence,
-                                       grid, temporal, c.frame().hasHistory, kEnergyFrames, cap},
-                                      {grid},
-                                      {L, keys, out, grid}});
+            const float* input = c.floats(f.energyInput);
+            const int hasHistory = c.frame().hasHistory;
+            c.device().run(EnergyStep{
+                {L, keys, out, input, grid},
+                {L, keys, out, input, c.frame().confidence, grid, temporal, hasHistory,
+                 kEnergyFrames, cap},
+                {grid, temporal, hasHistory, kEnergyFrameFrames, frameShare},
+                {L, keys, out, input, grid},
+                {grid},
+                {grid},
+                {L, keys, out, grid}});
         });
 }
 

@@ -151,7 +151,10 @@ class CpuDevice final : public Device {
         const int across = s.gain.grid.across, down = s.gain.grid.down;
         kernels_.runEnergyOutputSumsKernel(s.sums, across, down, scratch_);
         kernels_.runEnergyAccumulateKernel(s.accumulate, across, down, scratch_);
+        kernels_.runEnergyFrameCapKernel(s.frameCap, 1, 1, scratch_);
+        kernels_.runEnergyTailKernel(s.tail, across, down, scratch_);
         kernels_.runEnergyGainKernel(s.gain, across, down, scratch_);
+        kernels_.runEnergyFrameGainKernel(s.frameGain, 1, 1, scratch_);
         launch(s.apply);
     }
 

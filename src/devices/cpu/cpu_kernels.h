@@ -78,7 +78,10 @@ namespace rtd {
     X(EnergyInputKernel)                          \
     X(EnergyOutputSumsKernel)                     \
     X(EnergyAccumulateKernel)                     \
+    X(EnergyFrameCapKernel)                       \
+    X(EnergyTailKernel)                           \
     X(EnergyGainKernel)                           \
+    X(EnergyFrameGainKernel)                      \
     X(EnergyApplyKernel)                          \
     X(LearnedMixKernel)
 

@@ -347,7 +347,10 @@ class CudaDevice final : public Device {
         const int across = s.gain.grid.across, down = s.gain.grid.down;
         launchAny(s.sums, across, down);
         launchAny(s.accumulate, across, down);
+        launchAny(s.frameCap, 1, 1);
+        launchAny(s.tail, across, down);
         launchAny(s.gain, across, down);
+        launchAny(s.frameGain, 1, 1);
         check(cudaGetLastError(), "kernel launch");
         launch(s.apply);
     }
