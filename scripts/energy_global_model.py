@@ -1,29 +1,28 @@
 #!/usr/bin/env python3
-"""Model: a frame-level energy gain after the tile restoration. G_t = EMA_F(sum capped input) /
-EMA_F(sum output) over foreground pixels, each sample capped at phi * frame output sum / a (one
-sample lifts G by at most phi), G clipped to [1/gmax, gmax], applied to foreground pixels."""
-import argparse, sys
+"""A numpy model of a frame-level energy gain after the tiles' restoration (the method run with
+energy_frame_share=0; docs/energy.md, "The tail the tiles cut"): G_t = EMA_F(output sum + sum
+of min(input - output, cap)) / EMA_F(output sum) over foreground pixels under light x their
+tiles' mean, cap = phi x the frame's output sum x frames averaged (one sample lifts G by at most
+phi), G within [1/gmax, gmax], applied to those pixels.
+
+  PYTHONPATH=build/release/python:scripts scripts/energy_global_model.py SEQ...
+      [--method detail] [--variants phi:F:gmax[:light],...]"""
+import argparse
+
 import numpy as np
 import rtdenoise as rtd
-from energy_parts import sequence_paths, edge_mask, tile_sums
+from energy_parts import score as parts_score, sequence_paths
 
 W = np.array([0.2126, 0.7152, 0.0722], np.float32)
 
-def score(frames, outs, refs, tile=16):
-    fm = rtd.compare(outs, refs).frames
-    out_sum = sum(float(o.sum(dtype=np.float64)) for o in outs)
-    ref_sum = sum(float(r.sum(dtype=np.float64)) for r in refs)
-    to = tr = cn = None
-    for f, o, r in zip(frames, outs, refs):
-        mask = edge_mask(np.asarray(f.ids))
-        so, c = tile_sums(o, mask, tile); sr, _ = tile_sums(r, mask, tile)
-        to, tr, cn = (so, sr, c) if to is None else (to + so, tr + sr, cn + c)
-    keep = (cn >= 0.5 * len(frames) * tile * tile) & (
-        tr / np.maximum(cn, 1) >= 0.05 * ref_sum / sum(r[..., 0].size for r in refs) / 3)
-    ratios = to[keep] / tr[keep] if keep.any() else np.array([np.nan])
-    t = [m.temporal_error for m in fm if m.temporal_error is not None]
-    return np.array([out_sum / ref_sum, np.percentile(ratios, 5), np.percentile(ratios, 95),
-                     np.mean([m.relmse for m in fm]), np.mean([m.psnr for m in fm]), np.mean(t)])
+FIELDS = ("energy", "tile_p5", "tile_p95", "rel_mse", "psnr", "temporal")
+
+
+def score(frames, outs, refs):
+    """energy_parts' figures as an array: energy, tiles 5/95 %, relMSE, PSNR, temporal."""
+    figures = parts_score(frames, outs, refs, 16)
+    return np.array([figures[k] for k in FIELDS])
+
 
 T = 16
 def tiles(x, m):
@@ -71,7 +70,7 @@ for s in a.sequences:
     src, refp = sequence_paths(s)
     seq = rtd.open_sequence(src); frames = [seq[i] for i in range(len(seq))]
     refs = [rtd.read_exr(q)[..., :3] for q in refp]
-    den = rtd.Denoiser(a.method); outs = [den.denoise(**f.inputs()) for f in frames]; den.close()
+    den = rtd.Denoiser(a.method, energy_frame_share=0); outs = [den.denoise(**f.inputs()) for f in frames]; den.close()
     ins = [np.asarray(f.color)[..., :3].astype(np.float32) for f in frames]
     ein = sum(float(x.sum(dtype=np.float64)) for x in ins) / sum(float(r.sum(dtype=np.float64)) for r in refs)
     b = score(frames, outs, refs); rows["base"].append(b); rows["input"].append(ein)

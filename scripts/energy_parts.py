@@ -136,6 +136,11 @@ def evaluate(frames, refs, method, settings, tile, cli=None, source=None):
         den = rtd.Denoiser(method, **settings)
         outs = [den.denoise(**f.inputs()) for f in frames]
         den.close()
+    return score(frames, outs, refs, tile)
+
+
+def score(frames, outs, refs, tile):
+    """The figures of `outs` against `refs`: energy, its tile percentiles, relMSE, PSNR, temporal."""
     comparison = rtd.compare(outs, refs)
     frame_metrics = comparison.frames
     out_sum = sum(float(o.sum(dtype=np.float64)) for o in outs)

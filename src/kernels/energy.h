@@ -51,9 +51,7 @@ struct EnergyGrid {
     RTD_HOST_DEVICE RTD_INLINE float& threshold(int t) const { return frame[3 * tiles() + t]; }
     RTD_HOST_DEVICE RTD_INLINE float& inputSum(int t) const { return frame[4 * tiles() + t]; }
     // this frame's output sum over the counted pixels; the light the tile's cap cut there
-    RTD_HOST_DEVICE RTD_INLINE float& countedOutput(int t) const {
-        return frame[5 * tiles() + t];
-    }
+    RTD_HOST_DEVICE RTD_INLINE float& countedOutput(int t) const { return frame[5 * tiles() + t]; }
     RTD_HOST_DEVICE RTD_INLINE float& tail(int t) const { return frame[6 * tiles() + t]; }
     // history: averaged input sum, averaged output sum, frames averaged
     RTD_HOST_DEVICE RTD_INLINE float& input(int t) const { return history[t]; }
@@ -76,6 +74,19 @@ RTD_HOST_DEVICE RTD_INLINE int energyTilesAcross(int width) {
 RTD_HOST_DEVICE RTD_INLINE Float3 loadInterleaved(const float* rgb, int width, int x, int y) {
     const PixelIndex s = PixelIndex(y) * width + x;
     return {rgb[3 * s], rgb[3 * s + 1], rgb[3 * s + 2]};
+}
+// Its luminance, a negative one as 0: what every tile sum counts.
+RTD_HOST_DEVICE RTD_INLINE float outputLuminance(const float* rgb, int width, int x, int y) {
+    return maxf(luminance(loadInterleaved(rgb, width, x, y)), 0.0f);
+}
+
+// The pixels of tile (tx, ty): [x0, x1) x [y0, y1), clipped to the image.
+struct EnergyTilePixels {
+    int x0, y0, x1, y1;
+};
+RTD_HOST_DEVICE RTD_INLINE EnergyTilePixels energyTilePixels(const Layout& layout, int tx, int ty) {
+    return {tx * kEnergyTile, ty * kEnergyTile, mini(tx * kEnergyTile + kEnergyTile, layout.width),
+            mini(ty * kEnergyTile + kEnergyTile, layout.height)};
 }
 
 // Per pixel, right after the ingest (before any step changes its images, or the output overwrites
@@ -101,13 +112,11 @@ struct EnergyOutputSumsKernel {
 
     RTD_HOST_DEVICE RTD_INLINE void operator()(int tx, int ty) const {
         float sum = 0.0f, count = 0.0f, input = 0.0f;
-        const int x1 = mini(tx * kEnergyTile + kEnergyTile, layout.width);
-        const int y1 = mini(ty * kEnergyTile + kEnergyTile, layout.height);
-        for (int y = ty * kEnergyTile; y < y1; ++y)
-            for (int x = tx * kEnergyTile; x < x1; ++x) {
+        const EnergyTilePixels p = energyTilePixels(layout, tx, ty);
+        for (int y = p.y0; y < p.y1; ++y)
+            for (int x = p.x0; x < p.x1; ++x) {
                 const bool foreground = filterKey[layout.index(x, y)] >= 0;
-                const float out =
-                    maxf(luminance(loadInterleaved(rgbOut, layout.width, x, y)), 0.0f);
+                const float out = outputLuminance(rgbOut, layout.width, x, y);
                 sum += foreground ? out : 0.0f;
                 input += foreground ? maxf(inputLuminance[layout.index(x, y)], 0.0f) : 0.0f;
                 count += foreground ? 1.0f : 0.0f;
@@ -154,13 +163,11 @@ struct EnergyAccumulateKernel {
         // method's loss, which would cap the light that restores it.
         const float cap = capScale * averaged / maxFrames * maxf(sum, inputSum) / maxf(count, 1.0f);
         float input = 0.0f, output = 0.0f, confident = 0.0f, pixels = 0.0f;
-        const int x1 = mini(tx * kEnergyTile + kEnergyTile, layout.width);
-        const int y1 = mini(ty * kEnergyTile + kEnergyTile, layout.height);
-        for (int y = ty * kEnergyTile; y < y1; ++y)
-            for (int x = tx * kEnergyTile; x < x1; ++x) {
+        const EnergyTilePixels p = energyTilePixels(layout, tx, ty);
+        for (int y = p.y0; y < p.y1; ++y)
+            for (int x = p.x0; x < p.x1; ++x) {
                 const PixelIndex i = layout.index(x, y);
-                const float out =
-                    maxf(luminance(loadInterleaved(rgbOut, layout.width, x, y)), 0.0f);
+                const float out = outputLuminance(rgbOut, layout.width, x, y);
                 const bool counted = filterKey[i] >= 0 && out <= cap;
                 const float in = clampf(inputLuminance[i], 0.0f, cap);
                 input += counted ? in : 0.0f;
@@ -215,13 +222,11 @@ struct EnergyTailKernel {
         const int t = grid.tile(tx, ty);
         const float cap = grid.threshold(t), bound = grid.whole[0];
         float tail = 0.0f;
-        const int x1 = mini(tx * kEnergyTile + kEnergyTile, layout.width);
-        const int y1 = mini(ty * kEnergyTile + kEnergyTile, layout.height);
-        for (int y = ty * kEnergyTile; y < y1; ++y)
-            for (int x = tx * kEnergyTile; x < x1; ++x) {
+        const EnergyTilePixels p = energyTilePixels(layout, tx, ty);
+        for (int y = p.y0; y < p.y1; ++y)
+            for (int x = p.x0; x < p.x1; ++x) {
                 const PixelIndex i = layout.index(x, y);
-                const float out =
-                    maxf(luminance(loadInterleaved(rgbOut, layout.width, x, y)), 0.0f);
+                const float out = outputLuminance(rgbOut, layout.width, x, y);
                 const bool counted = filterKey[i] >= 0 && out <= cap;
                 tail += counted ? minf(maxf(inputLuminance[i] - cap, 0.0f), bound) : 0.0f;
             }
@@ -271,9 +276,9 @@ struct EnergyFrameGainKernel {
             frames > 1.0f ? before[1] + a * (restored - before[1]) : restored;
         grid.wholeHistory[0] = averagedTail;
         grid.wholeHistory[1] = averagedOutput;
-        grid.whole[1] =
-            averagedOutput > 1e-20f ? clampf(1.0f + averagedTail / averagedOutput, 1.0f, kMax)
-                                    : 1.0f;
+        grid.whole[1] = averagedOutput > 1e-20f
+                            ? clampf(1.0f + averagedTail / averagedOutput, 1.0f, kMax)
+                            : 1.0f;
     }
 };
 
